@@ -1,0 +1,11 @@
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace imumatch::apps {
+
+// Each subcommand adds itself to the app; the callback runs the command and may throw any
+// imumatch::Error, which main() maps to an exit code.
+// (Declared here, defined in <name>_command.cc, called from main.cc.)
+
+}  // namespace imumatch::apps

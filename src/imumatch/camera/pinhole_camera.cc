@@ -1,0 +1,171 @@
+#include "imumatch/camera/pinhole_camera.h"
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <vector>
+
+#include <Eigen/LU>
+
+#include "imumatch/core/error.h"
+
+namespace imumatch {
+
+void PinholeCamera::Check() const {
+  IMUMATCH_CHECK(width > 0 && height > 0, "image size " << width << "x" << height);
+  IMUMATCH_CHECK(std::isfinite(fx) && fx > 0 && std::isfinite(fy) && fy > 0,
+                 "focal lengths fx=" << fx << " fy=" << fy);
+  IMUMATCH_CHECK(std::isfinite(cx) && std::isfinite(cy), "principal point");
+  IMUMATCH_CHECK(std::isfinite(depth_scale) && depth_scale > 0, "depth_scale=" << depth_scale);
+  for (double d : distortion) IMUMATCH_CHECK(std::isfinite(d), "distortion coefficient");
+}
+
+bool PinholeCamera::HasDistortion() const {
+  for (double d : distortion) {
+    if (d != 0.0) return true;
+  }
+  return false;
+}
+
+Eigen::Matrix3d PinholeCamera::K() const {
+  Eigen::Matrix3d k;
+  k << fx, 0, cx, 0, fy, cy, 0, 0, 1;
+  return k;
+}
+
+Eigen::Vector2d PinholeCamera::NormalizedToPixel(const Eigen::Vector2d& xy) const {
+  double x = xy.x(), y = xy.y();
+  if (HasDistortion()) {
+    const auto& [k1, k2, p1, p2, k3] = distortion;
+    const double r2 = x * x + y * y;
+    const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+    const double xd = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
+    const double yd = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
+    x = xd;
+    y = yd;
+  }
+  return Eigen::Vector2d(fx * x + cx, fy * y + cy);
+}
+
+Eigen::Vector2d PinholeCamera::PixelToNormalized(const Eigen::Vector2d& uv) const {
+  const Eigen::Vector2d distorted((uv.x() - cx) / fx, (uv.y() - cy) / fy);
+  if (!HasDistortion()) return distorted;
+  // Gauss-Newton on the distortion model with a numeric Jacobian; converges in a few steps for
+  // points inside the image.
+  Eigen::Vector2d xy = distorted;
+  const auto distort = [this](const Eigen::Vector2d& p) {
+    const Eigen::Vector2d pix = NormalizedToPixel(p);
+    return Eigen::Vector2d((pix.x() - cx) / fx, (pix.y() - cy) / fy);
+  };
+  for (int it = 0; it < 20; ++it) {
+    const Eigen::Vector2d r = distort(xy) - distorted;
+    if (r.norm() < 1e-14) break;
+    Eigen::Matrix2d j;
+    const double h = 1e-7;
+    j.col(0) = (distort(xy + Eigen::Vector2d(h, 0)) - distort(xy - Eigen::Vector2d(h, 0))) / (2 * h);
+    j.col(1) = (distort(xy + Eigen::Vector2d(0, h)) - distort(xy - Eigen::Vector2d(0, h))) / (2 * h);
+    xy -= j.inverse() * r;
+  }
+  return xy;
+}
+
+std::optional<Eigen::Vector2d> PinholeCamera::Project(const Eigen::Vector3d& p_in_cam) const {
+  if (!(p_in_cam.z() > 0.0)) return std::nullopt;
+  return NormalizedToPixel(p_in_cam.head<2>() / p_in_cam.z());
+}
+
+Eigen::Vector3d PinholeCamera::Unproject(const Eigen::Vector2d& uv, double depth_m) const {
+  const Eigen::Vector2d xy = PixelToNormalized(uv);
+  return Eigen::Vector3d(xy.x() * depth_m, xy.y() * depth_m, depth_m);
+}
+
+double PinholeCamera::DepthFromRaw(uint16_t raw) const {
+  if (raw == 0) return std::numeric_limits<double>::quiet_NaN();
+  return static_cast<double>(raw) / depth_scale;
+}
+
+bool PinholeCamera::IsInside(const Eigen::Vector2d& uv, double margin) const {
+  return uv.x() >= -0.5 + margin && uv.y() >= -0.5 + margin && uv.x() < width - 0.5 - margin &&
+         uv.y() < height - 0.5 - margin;
+}
+
+PinholeCamera PinholeCamera::KinectDefault() { return PinholeCamera{}; }
+
+PinholeCamera PinholeCamera::TumFreiburg1() {
+  PinholeCamera c;
+  c.fx = 517.3;
+  c.fy = 516.5;
+  c.cx = 318.6;
+  c.cy = 255.3;
+  c.distortion = {0.2624, -0.9531, -0.0054, 0.0026, 1.1633};
+  return c;
+}
+
+std::string PinholeCamera::ToString() const {
+  std::ostringstream out;
+  out << width << "x" << height << " fx=" << fx << " fy=" << fy << " cx=" << cx << " cy=" << cy;
+  if (HasDistortion()) {
+    out << " d=[" << distortion[0] << " " << distortion[1] << " " << distortion[2] << " "
+        << distortion[3] << " " << distortion[4] << "]";
+  }
+  out << " depth_scale=" << depth_scale;
+  return out.str();
+}
+
+PinholeCamera ParseCameraFromText(const std::string& text, const std::string& source_name) {
+  std::istringstream in(text);
+  std::string line;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (const auto hash = line.find('#'); hash != std::string::npos) line.erase(hash);
+    std::istringstream fields(line);
+    std::vector<double> v;
+    std::string token;
+    while (fields >> token) {
+      char* end = nullptr;
+      const double d = std::strtod(token.c_str(), &end);
+      if (end != token.c_str() + token.size() || !std::isfinite(d)) {
+        throw InputError(source_name, line_no, "'" + token + "' is not a finite number");
+      }
+      v.push_back(d);
+    }
+    if (v.empty()) continue;
+    if (v.size() != 4 && (v.size() < 6 || v.size() > 11)) {
+      throw InputError(source_name, line_no,
+                       "expected 'fx fy cx cy [width height [k1 k2 p1 p2 [k3]]]', got " +
+                           std::to_string(v.size()) + " numbers");
+    }
+    PinholeCamera c;
+    c.fx = v[0];
+    c.fy = v[1];
+    c.cx = v[2];
+    c.cy = v[3];
+    if (v.size() >= 6) {
+      if (v[4] != std::floor(v[4]) || v[5] != std::floor(v[5])) {
+        throw InputError(source_name, line_no, "width and height must be whole numbers");
+      }
+      c.width = static_cast<int>(v[4]);
+      c.height = static_cast<int>(v[5]);
+    }
+    for (size_t i = 6; i < v.size(); ++i) c.distortion[i - 6] = v[i];
+    try {
+      c.Check();
+    } catch (const InvalidArgument& e) {
+      throw InputError(source_name, line_no, e.what());
+    }
+    return c;
+  }
+  throw InputError(source_name, "no intrinsics found (expected a line 'fx fy cx cy')");
+}
+
+PinholeCamera ReadCameraFromText(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, "cannot open camera intrinsics file");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return ParseCameraFromText(buffer.str(), path);
+}
+
+}  // namespace imumatch

@@ -1,0 +1,63 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include <Eigen/Core>
+
+namespace imumatch {
+
+// Pinhole camera with optional radial-tangential (OpenCV "plumb bob": k1 k2 p1 p2 k3) distortion
+// and a depth scale for 16-bit depth images.
+//
+// Pixel-centre convention (the OpenCV one): integer pixel coordinates are pixel centres. Pixel
+// (0,0) covers [-0.5, 0.5) x [-0.5, 0.5); the image spans [-0.5, width-0.5) x [-0.5, height-0.5).
+// u grows to the right (columns), v downwards (rows). Camera frame: x right, y down, z forward.
+struct PinholeCamera {
+  int width = 640;
+  int height = 480;
+  double fx = 525.0;
+  double fy = 525.0;
+  double cx = 319.5;
+  double cy = 239.5;
+  // k1, k2, p1, p2, k3. All zero means no distortion.
+  std::array<double, 5> distortion = {0, 0, 0, 0, 0};
+  // Raw depth units per metre: TUM and Kinect PNGs store 5000 per metre (value / 5000 = metres).
+  double depth_scale = 5000.0;
+
+  // Throws InvalidArgument for a non-positive size, focal length or depth scale, or non-finite values.
+  void Check() const;
+
+  bool HasDistortion() const;
+  Eigen::Matrix3d K() const;
+
+  // Camera point -> pixel. nullopt when z <= 0 (behind or on the camera plane).
+  std::optional<Eigen::Vector2d> Project(const Eigen::Vector3d& p_in_cam) const;
+  // Pixel + metric depth (z, along the optical axis) -> camera point. Undistorts first.
+  Eigen::Vector3d Unproject(const Eigen::Vector2d& uv, double depth_m) const;
+  // Pixel -> bearing on the z=1 plane (undistorted).
+  Eigen::Vector2d PixelToNormalized(const Eigen::Vector2d& uv) const;
+  // z=1 plane point -> pixel (distorted).
+  Eigen::Vector2d NormalizedToPixel(const Eigen::Vector2d& xy) const;
+
+  // Raw 16-bit depth -> metres; 0 (no reading) maps to NaN.
+  double DepthFromRaw(uint16_t raw) const;
+  // True when uv lies inside the image shrunk by margin pixels on each side.
+  bool IsInside(const Eigen::Vector2d& uv, double margin = 0.0) const;
+
+  // The generic Kinect v1 values (fx=fy=525, cx=319.5, cy=239.5) and the TUM fr1 calibration
+  // (fx=517.3 fy=516.5 cx=318.6 cy=255.3, d = 0.2624 -0.9531 -0.0054 0.0026 1.1633).
+  static PinholeCamera KinectDefault();
+  static PinholeCamera TumFreiburg1();
+
+  std::string ToString() const;
+};
+
+// Plain text intrinsics: "fx fy cx cy" optionally followed by "width height" and up to five
+// distortion coefficients, on one line; '#' starts a comment. Throws InputError(file, line, ...).
+PinholeCamera ReadCameraFromText(const std::string& path);
+PinholeCamera ParseCameraFromText(const std::string& text, const std::string& source_name);
+
+}  // namespace imumatch
