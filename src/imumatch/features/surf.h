@@ -1,0 +1,76 @@
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/features2d.hpp>
+
+namespace imumatch {
+
+// Options of the SURF detector/descriptor (Bay, Ess, Tuytelaars, Van Gool, "Speeded-Up Robust
+// Features (SURF)", CVIU 110(3), 2008; ECCV 2006).
+struct SurfOptions {
+  // Minimum determinant-of-Hessian response of a keypoint. Same scale as OpenCV's
+  // xfeatures2d::SURF hessianThreshold on 0-255 images (each box lobe is normalised by its area),
+  // so the OpenCV default of 100 gives a comparable number of keypoints. Must be >= 0.
+  double hessian_threshold = 100.0;
+  // Number of octaves. Octave o uses filter sizes L = 3 * (2^(o+1) * (i+1) + 1), i =
+  // 0..n_intervals+1 (9,15,21,27; 15,27,39,51; 27,51,75,99; ...) sampled every 2^o pixels. 1..8.
+  int n_octaves = 4;
+  // Scale layers per octave in which extrema are searched (OpenCV's nOctaveLayers): each octave
+  // evaluates n_intervals + 2 filter sizes. 2 is the paper's 4 filters per octave. 1..8.
+  int n_intervals = 2;
+  // U-SURF: skip the orientation assignment, descriptors are computed in the image axes and every
+  // keypoint angle is 0.
+  bool upright = false;
+  // 0 keeps every keypoint above the threshold; otherwise only the max_keypoints strongest
+  // (largest response). Only applies to detection, not to keypoints passed to compute().
+  int max_keypoints = 0;
+
+  void Check() const;
+};
+
+// SURF detector and 64-dimensional descriptor, written from the paper, usable through the
+// cv::Feature2D interface (detect / compute / detectAndCompute).
+//
+// Keypoint conventions (those of OpenCV's xfeatures2d::SURF, so keypoints are interchangeable):
+//   - pt: sub-pixel, sub-scale interpolated position; integer coordinates are pixel centres.
+//   - size: the (interpolated, not rounded) side L of the box filter that fired, in pixels. The
+//     scale of the keypoint, i.e. the sigma of the Gaussian that the filter approximates, is
+//     s = 1.2 * size / 9 (a 9x9 filter approximates sigma = 1.2). A Gaussian blob of standard
+//     deviation sigma_b gives its maximum at s ~= sigma_b. OpenCV rounds size to an integer.
+//   - angle: dominant orientation in degrees in [0, 360), measured like every OpenCV detector:
+//     atan2(dy, dx) in image coordinates (x right, y down), i.e. clockwise on screen. Rotating the
+//     image by +a degrees counter-clockwise on screen (cv::getRotationMatrix2D(c, a, 1)) changes
+//     the angles by -a. With upright = true the angle is 0 (OpenCV's SURF reports 270 there, an
+//     artefact of its internal convention; 0 means "image axes" here).
+//   - response: determinant of the approximated Hessian (Dxx*Dyy - (0.9*Dxy)^2) at the maximum.
+//   - octave: octave index (0-based). class_id: sign of the Laplacian (trace), +1 or -1, which a
+//     matcher may use to skip pairs of opposite sign (dark vs bright blobs).
+// Keypoints returned by detect are sorted by decreasing response.
+//
+// compute() on given keypoints recomputes the orientation (unless upright) from the image and
+// overwrites kp.angle; keypoints with size <= 0 or whose orientation window lies outside the image
+// are removed (as OpenCV does).
+class Surf : public cv::Feature2D {
+ public:
+  explicit Surf(const SurfOptions& options = SurfOptions());
+  static cv::Ptr<Surf> Create(const SurfOptions& options = SurfOptions());
+
+  const SurfOptions& options() const { return options_; }
+
+  void detectAndCompute(cv::InputArray image, cv::InputArray mask,
+                        std::vector<cv::KeyPoint>& keypoints, cv::OutputArray descriptors,
+                        bool useProvidedKeypoints = false) override;
+
+  int descriptorSize() const override { return 64; }
+  int descriptorType() const override { return CV_32F; }
+  int defaultNorm() const override { return cv::NORM_L2; }
+  cv::String getDefaultName() const override { return "imumatch.SURF"; }
+
+ private:
+  SurfOptions options_;
+};
+
+}  // namespace imumatch
