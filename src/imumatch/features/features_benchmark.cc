@@ -80,6 +80,17 @@ void BM_SurfUpright(benchmark::State& state) {
   state.counters["keypoints"] = static_cast<double>(keypoints.size());
 }
 
+void BM_SurfDetectOnly(benchmark::State& state) {
+  cv::Ptr<cv::Feature2D> detector = imumatch::Surf::Create();
+  std::vector<cv::KeyPoint> keypoints;
+  for (auto _ : state) {
+    detector->detect(Image(), keypoints);
+    benchmark::DoNotOptimize(keypoints.data());
+  }
+  state.counters["keypoints"] = static_cast<double>(keypoints.size());
+}
+
+BENCHMARK(BM_SurfDetectOnly)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_SurfAll)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_SiftAll)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_SurfUpright)->Unit(benchmark::kMillisecond);

@@ -50,21 +50,51 @@ class IntegralImage {
     return static_cast<float>(static_cast<int32_t>(r1[x1] - r1[x0] - r0[x1] + r0[x0]));
   }
 
-  // Haar wavelet responses of side 2*half centred on the corner between pixels (x-1, y-1) and
-  // (x, y): right minus left half, bottom minus top half. False when the wavelet leaves the image.
-  bool Haar(int x, int y, int half, float* hx, float* hy) const {
-    if (x - half < 0 || y - half < 0 || x + half > width_ || y + half > height_) return false;
-    const uint32_t* top = Row(y - half);
-    const uint32_t* mid = Row(y);
-    const uint32_t* bot = Row(y + half);
-    const int xl = x - half;
-    const int xr = x + half;
-    // Column sums over the full height and row sums over the full width.
-    const auto box = [](const uint32_t* r0, const uint32_t* r1, int a, int b) {
-      return static_cast<float>(static_cast<int32_t>(r1[b] - r1[a] - r0[b] + r0[a]));
-    };
-    *hx = box(top, bot, x, xr) - box(top, bot, xl, x);
-    *hy = box(mid, bot, xl, xr) - box(top, mid, xl, xr);
+  // Haar wavelet responses (right minus left half, bottom minus top half) of side 2*half centred
+  // on the sub-pixel point (px, py), integer coordinates being pixel centres. The box sums are
+  // taken on the bilinearly interpolated integral image, i.e. over boxes shifted by fractions of a
+  // pixel, so responses vary smoothly with the position. False when the wavelet leaves the image.
+  bool Haar(float px, float py, int half, float* hx, float* hy) const {
+    // Integral-image index k is the pixel boundary at coordinate k - 0.5.
+    const float fx = px + 0.5f;
+    const float fy = py + 0.5f;
+    const float lo = static_cast<float>(half);
+    if (!(fx >= lo && fy >= lo && fx < static_cast<float>(width_ - half) &&
+          fy < static_cast<float>(height_ - half))) {
+      return false;  // also rejects NaN
+    }
+    const int x = static_cast<int>(fx);
+    const int y = static_cast<int>(fy);
+    const float ax = fx - static_cast<float>(x);
+    const float ay = fy - static_cast<float>(y);
+    // 6 x 6 integral values at rows/cols {-half, -half+1, 0, 1, half, half+1} around (x, y).
+    const int offs[6] = {-half, -half + 1, 0, 1, half, half + 1};
+    uint32_t m[6][6];
+    for (int i = 0; i < 6; ++i) {
+      const uint32_t* row = Row(y + offs[i]);
+      for (int k = 0; k < 6; ++k) m[i][k] = row[x + offs[k]];
+    }
+    // Exact integer responses of the wavelets centred on the four integral corners around the
+    // point (wrap-around arithmetic, see above), blended bilinearly.
+    float rx[2][2];
+    float ry[2][2];
+    for (int a = 0; a < 2; ++a) {
+      for (int b = 0; b < 2; ++b) {
+        const uint32_t* t = m[a];
+        const uint32_t* c = m[a + 2];
+        const uint32_t* d = m[a + 4];
+        rx[a][b] = static_cast<float>(static_cast<int32_t>((d[b + 4] - 2u * d[b + 2] + d[b]) -
+                                                           (t[b + 4] - 2u * t[b + 2] + t[b])));
+        ry[a][b] = static_cast<float>(static_cast<int32_t>((d[b + 4] - 2u * c[b + 4] + t[b + 4]) -
+                                                           (d[b] - 2u * c[b] + t[b])));
+      }
+    }
+    const float w00 = (1.f - ax) * (1.f - ay);
+    const float w01 = ax * (1.f - ay);
+    const float w10 = (1.f - ax) * ay;
+    const float w11 = ax * ay;
+    *hx = w00 * rx[0][0] + w01 * rx[0][1] + w10 * rx[1][0] + w11 * rx[1][1];
+    *hy = w00 * ry[0][0] + w01 * ry[0][1] + w10 * ry[1][0] + w11 * ry[1][1];
     return true;
   }
 
@@ -130,26 +160,61 @@ struct ResponseLayer {
   float At(int r, int c) const { return det[static_cast<size_t>(r) * cols + c]; }
 };
 
+inline int32_t BoxSum(const uint32_t* r0, const uint32_t* r1, int x0, int x1) {
+  return static_cast<int32_t>(r1[x1] - r1[x0] - r0[x1] + r0[x0]);
+}
+
+// Fills `layer` (filter and step set by the caller). Reuses the layer's buffer.
 void ComputeLayer(const IntegralImage& ii, ResponseLayer* layer) {
   const HessianFilter filter(layer->filter);
   const int step = layer->step;
   const int h = filter.half;
+  const int l = filter.lobe;
+  const float inv_lobe_area = filter.inv_lobe_area;
+  const float inv_square_area = filter.inv_square_area;
   const int width = ii.width();
   const int height = ii.height();
   layer->rows = (height - 1) / step + 1;
   layer->cols = (width - 1) / step + 1;
-  layer->det.assign(static_cast<size_t>(layer->rows) * layer->cols, 0.f);
-  const int r_begin = (h + step - 1) / step;
-  const int r_end = (height - 1 - h) / step + 1;
-  const int c_begin = (h + step - 1) / step;
-  const int c_end = (width - 1 - h) / step + 1;
-  if (r_end <= r_begin || c_end <= c_begin) return;
-  cv::parallel_for_(cv::Range(r_begin, r_end), [&](const cv::Range& range) {
+  layer->det.resize(static_cast<size_t>(layer->rows) * layer->cols);
+  // Samples whose filter fits in the image: [r_begin, r_end) x [c_begin, c_end); others hold 0.
+  const int r_begin = std::min(layer->rows, (h + step - 1) / step);
+  const int r_end = std::max(r_begin, std::min(layer->rows, (height - 1 - h) / step + 1));
+  const int c_begin = std::min(layer->cols, (h + step - 1) / step);
+  const int c_end = std::max(c_begin, std::min(layer->cols, (width - 1 - h) / step + 1));
+  const int cols = layer->cols;
+  cv::parallel_for_(cv::Range(0, layer->rows), [&](const cv::Range& range) {
     for (int r = range.start; r < range.end; ++r) {
-      float* out = &layer->det[static_cast<size_t>(r) * layer->cols];
+      float* out = &layer->det[static_cast<size_t>(r) * cols];
+      if (r < r_begin || r >= r_end || c_begin == c_end) {
+        std::fill(out, out + cols, 0.f);
+        continue;
+      }
+      std::fill(out, out + c_begin, 0.f);
+      std::fill(out + c_end, out + cols, 0.f);
       const int y = r * step;
+      const uint32_t* xx0 = ii.Row(y - l + 1);  // Dxx: rows of the three side-by-side lobes
+      const uint32_t* xx1 = ii.Row(y + l);
+      const uint32_t* yy0 = ii.Row(y - h);  // Dyy: whole strip and middle lobe
+      const uint32_t* yy1 = ii.Row(y - h + l);
+      const uint32_t* yy2 = ii.Row(y - h + 2 * l);
+      const uint32_t* yy3 = ii.Row(y + h + 1);
+      const uint32_t* xy0 = ii.Row(y - l);  // Dxy: squares above and below the centre row
+      const uint32_t* xy1 = ii.Row(y);
+      const uint32_t* xy2 = ii.Row(y + 1);
+      const uint32_t* xy3 = ii.Row(y + 1 + l);
       for (int c = c_begin; c < c_end; ++c) {
-        out[c] = Determinant(filter.At(ii, c * step, y));
+        const int x = c * step;
+        const int32_t dxx =
+            BoxSum(xx0, xx1, x - h, x + h + 1) - 3 * BoxSum(xx0, xx1, x - h + l, x - h + 2 * l);
+        const int32_t dyy =
+            BoxSum(yy0, yy3, x - l + 1, x + l) - 3 * BoxSum(yy1, yy2, x - l + 1, x + l);
+        const int32_t dxy = BoxSum(xy0, xy1, x - l, x) + BoxSum(xy2, xy3, x + 1, x + 1 + l) -
+                            BoxSum(xy0, xy1, x + 1, x + 1 + l) - BoxSum(xy2, xy3, x - l, x);
+        const float fxx = static_cast<float>(dxx) * inv_lobe_area;
+        const float fyy = static_cast<float>(dyy) * inv_lobe_area;
+        const float fxy = static_cast<float>(dxy) * inv_square_area;
+        out[c] = fxx * fyy - 0.81f * fxy * fxy;
       }
     }
   });
@@ -166,8 +231,7 @@ bool KeypointGreater(const cv::KeyPoint& a, const cv::KeyPoint& b) {
 // extremum in sample units (x, y, layer). False when the system is singular or the offset leaves
 // the neighbourhood (|offset| > 1 in some dimension, as in OpenCV).
 bool InterpolateExtremum(const ResponseLayer& below, const ResponseLayer& mid,
-                         const ResponseLayer& above, int r, int c, cv::Vec3d* offset,
-                         double* value) {
+                         const ResponseLayer& above, int r, int c, cv::Vec3d* offset) {
   const double v = mid.At(r, c);
   const double dx = 0.5 * (mid.At(r, c + 1) - mid.At(r, c - 1));
   const double dy = 0.5 * (mid.At(r + 1, c) - mid.At(r - 1, c));
@@ -187,7 +251,6 @@ bool InterpolateExtremum(const ResponseLayer& below, const ResponseLayer& mid,
   if (!cv::solve(hessian, -gradient, x, cv::DECOMP_LU)) return false;
   if (!(std::abs(x[0]) <= 1.0 && std::abs(x[1]) <= 1.0 && std::abs(x[2]) <= 1.0)) return false;
   *offset = x;
-  *value = v + 0.5 * gradient.dot(x);
   return true;
 }
 
@@ -208,7 +271,9 @@ std::vector<cv::KeyPoint> FastHessian(const IntegralImage& ii, const SurfOptions
     const int c_end = (width - 1 - top_half) / step;
     if (r_end <= r_begin || c_end <= c_begin) break;  // larger octaves do not fit either
 
-    std::vector<ResponseLayer> layers(layers_per_octave);
+    // Per-thread buffers reused across calls and octaves (no page faults on repeated calls).
+    thread_local std::vector<ResponseLayer> layers;
+    layers.resize(layers_per_octave);
     for (int i = 0; i < layers_per_octave; ++i) {
       layers[i].filter = FilterSize(octave, i);
       layers[i].step = step;
@@ -237,8 +302,7 @@ std::vector<cv::KeyPoint> FastHessian(const IntegralImage& ii, const SurfOptions
           }
           if (!is_max) continue;
           cv::Vec3d offset;
-          double value = 0.0;
-          if (!InterpolateExtremum(below, mid, above, r, c, &offset, &value)) continue;
+          if (!InterpolateExtremum(below, mid, above, r, c, &offset)) continue;
           const HessianValues h = mid_filter.At(ii, c * step, r * step);
           const float trace = h.dxx + h.dyy;
           cv::KeyPoint kp;
@@ -246,7 +310,7 @@ std::vector<cv::KeyPoint> FastHessian(const IntegralImage& ii, const SurfOptions
           kp.pt.y = static_cast<float>((r + offset[1]) * step);
           kp.size = static_cast<float>(mid.filter + offset[2] * filter_spacing);
           kp.angle = 0.f;
-          kp.response = static_cast<float>(value);
+          kp.response = v;  // the sampled maximum, as OpenCV (always above the threshold)
           kp.octave = octave;
           kp.class_id = (trace > 0.f) - (trace < 0.f);
           keypoints.push_back(kp);
@@ -295,9 +359,6 @@ const std::array<float, 400>& DescriptorWeights() {
   return weights;
 }
 
-// Integer position of a wavelet whose centre (a pixel corner) is nearest to point p.
-inline int WaveletCorner(float p) { return static_cast<int>(std::floor(p + 1.f)); }
-
 // Dominant orientation in degrees (OpenCV convention) from Haar responses of side 4s in a circle
 // of radius 6s, summed in a 60-degree window sliding in 1-degree steps. False when no response
 // could be sampled.
@@ -308,17 +369,16 @@ bool DominantOrientation(const IntegralImage& ii, const cv::KeyPoint& kp, float*
   std::array<float, 360> bin_y{};
   int n = 0;
   for (const OrientationSample& sample : OrientationSamples()) {
-    const int x = WaveletCorner(kp.pt.x + static_cast<float>(sample.i) * s);
-    const int y = WaveletCorner(kp.pt.y + static_cast<float>(sample.j) * s);
     float hx = 0.f;
     float hy = 0.f;
-    if (!ii.Haar(x, y, half, &hx, &hy)) continue;
+    if (!ii.Haar(kp.pt.x + static_cast<float>(sample.i) * s,
+                 kp.pt.y + static_cast<float>(sample.j) * s, half, &hx, &hy)) {
+      continue;
+    }
     hx *= sample.weight;
     hy *= sample.weight;
     if (hx == 0.f && hy == 0.f) continue;
-    float a = std::atan2(hy, hx) * kRadToDeg;
-    if (a < 0.f) a += 360.f;
-    const int bin = std::min(359, static_cast<int>(a));
+    const int bin = std::min(359, static_cast<int>(cv::fastAtan2(hy, hx)));  // +-0.3 degrees
     bin_x[bin] += hx;
     bin_y[bin] += hy;
     ++n;
@@ -368,11 +428,9 @@ void ComputeDescriptor(const IntegralImage& ii, const cv::KeyPoint& kp, float* o
     const float v = (static_cast<float>(i) - 9.5f) * s;
     for (int j = 0; j < 20; ++j) {
       const float u = (static_cast<float>(j) - 9.5f) * s;
-      const int x = WaveletCorner(kp.pt.x + u * co - v * si);
-      const int y = WaveletCorner(kp.pt.y + u * si + v * co);
       float hx = 0.f;
       float hy = 0.f;
-      if (!ii.Haar(x, y, half, &hx, &hy)) continue;
+      if (!ii.Haar(kp.pt.x + u * co - v * si, kp.pt.y + u * si + v * co, half, &hx, &hy)) continue;
       const float w = weights[i * 20 + j];
       const float rx = w * (hx * co + hy * si);
       const float ry = w * (-hx * si + hy * co);
