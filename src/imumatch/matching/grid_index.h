@@ -1,0 +1,74 @@
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "imumatch/matching/match_types.h"
+
+namespace imumatch {
+
+// A uniform grid over one frame's keypoints for window queries. Build is O(n + cells) with a
+// counting sort into flat arrays (no per-cell containers); the points of a cell are stored
+// contiguously with their coordinates, so a query reads only the cells its box touches. Points
+// outside [0, width) x [0, height) are kept in the border cells (a query still finds them by their
+// exact coordinates). Build() reuses the arrays' capacity, so rebuilding per frame does not
+// allocate once warmed up.
+class GridIndex {
+ public:
+  GridIndex() = default;
+
+  // xs/ys: n coordinates. cell_size in pixels (> 0), width/height > 0. Throws InvalidArgument.
+  void Build(const float* xs, const float* ys, int n, int width, int height, float cell_size);
+  void Build(const std::vector<KeypointInfo>& keypoints, int width, int height, float cell_size);
+
+  int size() const { return static_cast<int>(index_.size()); }
+  int cols() const { return cols_; }
+  int rows() const { return rows_; }
+  float cell_size() const { return cell_size_; }
+
+  // Calls f(index, x, y) for every point with min_x <= x <= max_x and min_y <= y <= max_y
+  // (closed box). index is the point's position in the arrays given to Build.
+  template <typename F>
+  void ForEachInBox(float min_x, float min_y, float max_x, float max_y, F&& f) const {
+    if (index_.empty() || !(min_x <= max_x) || !(min_y <= max_y)) return;
+    const int c0 = CellCol(min_x), c1 = CellCol(max_x);
+    const int r0 = CellRow(min_y), r1 = CellRow(max_y);
+    for (int r = r0; r <= r1; ++r) {
+      const int row_base = r * cols_;
+      const int begin = cell_start_[row_base + c0];
+      const int end = cell_start_[row_base + c1 + 1];  // cells of a row are contiguous
+      for (int k = begin; k < end; ++k) {
+        const float x = x_[k], y = y_[k];
+        if (x >= min_x && x <= max_x && y >= min_y && y <= max_y) f(index_[k], x, y);
+      }
+    }
+  }
+
+  // Convenience for tests and tools: the indices inside the box, ascending.
+  std::vector<int> QueryBox(float min_x, float min_y, float max_x, float max_y) const;
+
+ private:
+  void BuildStrided(const unsigned char* xs, const unsigned char* ys, size_t stride, int n,
+                    int width, int height, float cell_size);
+  int CellCol(float x) const {
+    const float c = std::floor(x * inv_cell_);
+    return c < 0.0f ? 0 : (c >= static_cast<float>(cols_) ? cols_ - 1 : static_cast<int>(c));
+  }
+  int CellRow(float y) const {
+    const float r = std::floor(y * inv_cell_);
+    return r < 0.0f ? 0 : (r >= static_cast<float>(rows_) ? rows_ - 1 : static_cast<int>(r));
+  }
+
+  float cell_size_ = 1.0f;
+  float inv_cell_ = 1.0f;
+  int cols_ = 0;
+  int rows_ = 0;
+  std::vector<int> cell_start_;  // rows_*cols_ + 1 offsets into the arrays below
+  std::vector<int> index_;       // original point index, sorted by cell (row-major)
+  std::vector<float> x_, y_;     // coordinates in the same order
+  std::vector<int> cell_of_;     // scratch for Build: each point's cell
+  std::vector<int> cursor_;      // scratch for Build: next free slot per cell
+};
+
+}  // namespace imumatch

@@ -1,0 +1,247 @@
+#include "imumatch/matching/guided_matcher.h"
+
+#include <cmath>
+#include <limits>
+
+#include "imumatch/core/error.h"
+
+namespace imumatch {
+
+void GuidedMatcherOptions::Check() const {
+  IMUMATCH_CHECK(ratio > 0.0 && ratio <= 1.0, "ratio=" << ratio << " must be in (0, 1]");
+  IMUMATCH_CHECK(max_hamming_fraction >= 0.0 && max_hamming_fraction <= 1.0,
+                 "max_hamming_fraction=" << max_hamming_fraction);
+  IMUMATCH_CHECK(max_l2_relative >= 0.0 && std::isfinite(max_l2_relative),
+                 "max_l2_relative=" << max_l2_relative);
+  IMUMATCH_CHECK(orientation_tolerance_deg >= 0.0 && orientation_tolerance_deg <= 180.0,
+                 "orientation_tolerance_deg=" << orientation_tolerance_deg);
+  IMUMATCH_CHECK(scale_tolerance_factor >= 1.0 && std::isfinite(scale_tolerance_factor),
+                 "scale_tolerance_factor=" << scale_tolerance_factor);
+  IMUMATCH_CHECK(grid_cell_size > 0.0 && std::isfinite(grid_cell_size),
+                 "grid_cell_size=" << grid_cell_size);
+}
+
+namespace {
+
+float SquaredNorm(const uint8_t* row, int bytes) {
+  const float* v = reinterpret_cast<const float*>(row);
+  float s = 0.0f;
+  for (int k = 0; k < bytes / 4; ++k) s += v[k] * v[k];
+  return s;
+}
+
+// Angle difference wrapped to [-180, 180).
+float WrapDegrees(float a) {
+  a = std::fmod(a + 180.0f, 360.0f);
+  if (a < 0.0f) a += 360.0f;
+  return a - 180.0f;
+}
+
+}  // namespace
+
+MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
+                        const std::vector<KeypointInfo>& keypoints_a,
+                        const DescriptorView& descriptors_a,
+                        const std::vector<KeypointInfo>& keypoints_b, const GridIndex& grid_b,
+                        const DescriptorView& descriptors_b, const GuidedMatcherOptions& options) {
+  options.Check();
+  const int n = static_cast<int>(keypoints_a.size());
+  const int m = static_cast<int>(keypoints_b.size());
+  IMUMATCH_CHECK(static_cast<int>(predictions.size()) == n,
+                 predictions.size() << " predictions for " << n << " keypoints");
+  IMUMATCH_CHECK(descriptors_a.rows == n,
+                 descriptors_a.rows << " descriptors for " << n << " keypoints in A");
+  IMUMATCH_CHECK(descriptors_b.rows == m,
+                 descriptors_b.rows << " descriptors for " << m << " keypoints in B");
+  IMUMATCH_CHECK(grid_b.size() == m, "grid holds " << grid_b.size() << " points, B has " << m);
+  CheckCompatible(descriptors_a, descriptors_b);
+
+  MatchResult result;
+  MatchStats& stats = result.stats;
+  stats.queries = n;
+  if (n == 0) return result;
+
+  const DescriptorNorm norm = descriptors_a.norm;
+  const bool l2 = norm == DescriptorNorm::kL2;
+  const int bytes = descriptors_a.bytes;
+  const DescriptorCostFn cost_fn = m > 0 ? SelectCostFunction(norm, bytes) : nullptr;
+  const float ratio_cost = static_cast<float>(l2 ? options.ratio * options.ratio : options.ratio);
+  const bool use_ratio = options.ratio < 1.0;
+  const float max_hamming = static_cast<float>(options.max_hamming_fraction * bytes * 8);
+  const float max_l2_rel2 = static_cast<float>(options.max_l2_relative * options.max_l2_relative);
+  const float orient_tol = static_cast<float>(options.orientation_tolerance_deg);
+  const float scale_tol = static_cast<float>(options.scale_tolerance_factor);
+  const float inf = std::numeric_limits<float>::infinity();
+
+  std::vector<float> reverse_cost;
+  std::vector<int> reverse_idx;
+  if (options.mutual) {
+    reverse_cost.assign(m, inf);
+    reverse_idx.assign(m, -1);
+  }
+  result.matches.reserve(n / 2);
+
+  for (int i = 0; i < n; ++i) {
+    const KeypointPrediction& p = predictions[i];
+    switch (p.status) {
+      case PredictionStatus::kWithDepth:
+        ++stats.predicted_with_depth;
+        break;
+      case PredictionStatus::kWithoutDepth:
+        ++stats.predicted_without_depth;
+        break;
+      case PredictionStatus::kBehindCamera:
+        ++stats.behind_camera;
+        continue;
+      case PredictionStatus::kOutsideImage:
+        ++stats.outside_image;
+        continue;
+      case PredictionStatus::kInvalid:
+        ++stats.no_prediction;
+        continue;
+    }
+    const KeypointInfo& ka = keypoints_a[i];
+    const uint8_t* da = descriptors_a.Row(i);
+    const bool check_angle = options.check_orientation && ka.angle_deg >= 0.0f;
+    const bool check_size = options.check_scale && ka.size > 0.0f;
+    const float expected_angle = ka.angle_deg + p.angle_change_deg;
+    const float size_lo = check_size ? ka.size * p.scale_min / scale_tol : 0.0f;
+    const float size_hi = check_size ? ka.size * p.scale_max * scale_tol : 0.0f;
+    const bool capsule = p.status == PredictionStatus::kWithoutDepth;
+    const float r2 = p.radius * p.radius;
+
+    bool any_in_window = false, any_angle_ok = false;
+    float best = inf, second = inf;
+    int best_j = -1;
+    int64_t evaluated = 0;
+    grid_b.ForEachInBox(p.min_x, p.min_y, p.max_x, p.max_y, [&](int j, float x, float y) {
+      if (capsule && p.SegmentDistanceSquared(x, y) > r2) return;
+      any_in_window = true;
+      const KeypointInfo& kb = keypoints_b[j];
+      if (check_angle && kb.angle_deg >= 0.0f &&
+          std::fabs(WrapDegrees(kb.angle_deg - expected_angle)) > orient_tol) {
+        return;
+      }
+      any_angle_ok = true;
+      if (check_size && kb.size > 0.0f && (kb.size < size_lo || kb.size > size_hi)) return;
+      const float c = cost_fn(da, descriptors_b.Row(j), bytes);
+      ++evaluated;
+      if (c < second) {
+        if (c < best) {
+          second = best;
+          best = c;
+          best_j = j;
+        } else {
+          second = c;
+        }
+      }
+      if (options.mutual && c < reverse_cost[j]) {
+        reverse_cost[j] = c;
+        reverse_idx[j] = i;
+      }
+    });
+    stats.distances_computed += evaluated;
+    if (!any_in_window) {
+      ++stats.no_candidate_in_window;
+      continue;
+    }
+    if (!any_angle_ok) {
+      ++stats.orientation;
+      continue;
+    }
+    if (best_j < 0) {
+      ++stats.scale;
+      continue;
+    }
+    if (l2) {
+      const float na = SquaredNorm(da, bytes), nb = SquaredNorm(descriptors_b.Row(best_j), bytes);
+      if (best > max_l2_rel2 * 0.5f * (na + nb)) {
+        ++stats.distance_threshold;
+        continue;
+      }
+    } else if (best > max_hamming) {
+      ++stats.distance_threshold;
+      continue;
+    }
+    if (use_ratio && second < inf && !(best < ratio_cost * second)) {
+      ++stats.ratio_test;
+      continue;
+    }
+    Match match;
+    match.query_idx = i;
+    match.train_idx = best_j;
+    match.distance = CostToDistance(norm, best);
+    match.second_distance = second < inf ? CostToDistance(norm, second) : inf;
+    match.predicted_uv = p.uv;
+    result.matches.push_back(match);
+  }
+
+  if (options.mutual) {
+    size_t kept = 0;
+    for (const Match& match : result.matches) {
+      if (reverse_idx[match.train_idx] == match.query_idx) {
+        result.matches[kept++] = match;
+      } else {
+        ++stats.mutual;
+      }
+    }
+    result.matches.resize(kept);
+  }
+  stats.matched = static_cast<int>(result.matches.size());
+  return result;
+}
+
+MatchResult GuidedMatcherWorkspace::Match(const PinholeCamera& camera, const CameraMotion& motion,
+                                          const std::vector<cv::KeyPoint>& keypoints_a,
+                                          const cv::Mat& descriptors_a, const cv::Mat& depth_a,
+                                          const std::vector<cv::KeyPoint>& keypoints_b,
+                                          const cv::Mat& descriptors_b,
+                                          const PredictionOptions& prediction_options,
+                                          const GuidedMatcherOptions& matcher_options) {
+  matcher_options.Check();
+  const KeypointPredictor predictor(camera, motion, prediction_options);
+  const size_t n = keypoints_a.size();
+  info_a_.resize(n);
+  predictions_.resize(n);
+  const bool has_depth_image = !depth_a.empty();
+  for (size_t i = 0; i < n; ++i) {
+    const cv::KeyPoint& k = keypoints_a[i];
+    info_a_[i] = KeypointInfo{k.pt.x, k.pt.y, k.angle, k.size, k.octave};
+  }
+  if (has_depth_image) {
+    depths_ = SampleDepths(depth_a, camera.depth_scale, info_a_, prediction_options.depth_sampling);
+  }
+  for (size_t i = 0; i < n; ++i) {
+    double sigma_scale = 1.0;
+    if (prediction_options.scale_sigma_with_octave) {
+      const int level = static_cast<int8_t>(info_a_[i].octave & 0xFF);
+      sigma_scale = std::pow(prediction_options.octave_scale, level);
+    }
+    predictions_[i] = predictor.Predict(
+        Eigen::Vector2d(info_a_[i].x, info_a_[i].y),
+        has_depth_image ? depths_[i] : std::numeric_limits<double>::quiet_NaN(), sigma_scale);
+  }
+  info_b_.resize(keypoints_b.size());
+  for (size_t j = 0; j < keypoints_b.size(); ++j) {
+    const cv::KeyPoint& k = keypoints_b[j];
+    info_b_[j] = KeypointInfo{k.pt.x, k.pt.y, k.angle, k.size, k.octave};
+  }
+  grid_.Build(info_b_, camera.width, camera.height,
+              static_cast<float>(matcher_options.grid_cell_size));
+  return MatchGuided(predictions_, info_a_, DescriptorView::FromMat(descriptors_a), info_b_, grid_,
+                     DescriptorView::FromMat(descriptors_b), matcher_options);
+}
+
+MatchResult MatchFramesGuided(const PinholeCamera& camera, const CameraMotion& motion,
+                              const std::vector<cv::KeyPoint>& keypoints_a,
+                              const cv::Mat& descriptors_a, const cv::Mat& depth_a,
+                              const std::vector<cv::KeyPoint>& keypoints_b,
+                              const cv::Mat& descriptors_b,
+                              const PredictionOptions& prediction_options,
+                              const GuidedMatcherOptions& matcher_options) {
+  GuidedMatcherWorkspace workspace;
+  return workspace.Match(camera, motion, keypoints_a, descriptors_a, depth_a, keypoints_b,
+                         descriptors_b, prediction_options, matcher_options);
+}
+
+}  // namespace imumatch

@@ -1,0 +1,81 @@
+#pragma once
+
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "imumatch/camera/pinhole_camera.h"
+#include "imumatch/imu/camera_motion.h"
+#include "imumatch/matching/descriptor_distance.h"
+#include "imumatch/matching/grid_index.h"
+#include "imumatch/matching/match_types.h"
+#include "imumatch/matching/predictor.h"
+
+namespace imumatch {
+
+struct GuidedMatcherOptions {
+  // Lowe's ratio test on distances (not squared): best < ratio * second. 1 disables it. A lone
+  // candidate in the window always passes.
+  double ratio = 0.8;
+  // Absolute thresholds on the best distance. Hamming: max_hamming_fraction of the descriptor's
+  // bits (0.25 -> 64 of 256 for ORB). L2: the distance relative to the descriptors' size,
+  // |a - b| <= max_l2_relative * sqrt((|a|^2 + |b|^2) / 2), so it works for unit descriptors and
+  // for OpenCV's SIFT (norm ~512) alike.
+  double max_hamming_fraction = 0.25;
+  double max_l2_relative = 0.8;
+  // Reverse pass: keep i -> j only when, among the keypoints of A whose windows contain j and pass
+  // the consistency checks, i is the one closest to j.
+  bool mutual = false;
+  // |angle_b - angle_a - predicted change| <= tolerance, when both keypoints have an angle.
+  bool check_orientation = true;
+  double orientation_tolerance_deg = 30.0;
+  // size_b / size_a within [scale_min / factor, scale_max * factor] of the predicted ratio, when
+  // both keypoints have a size.
+  bool check_scale = true;
+  double scale_tolerance_factor = 2.0;
+  // Grid cell size of the index over frame B (pixels).
+  double grid_cell_size = 24.0;
+
+  void Check() const;
+};
+
+// Matches predicted keypoints of A to the keypoints of B found in their windows. predictions[i]
+// belongs to keypoints_a[i] / descriptors_a row i; grid_b indexes keypoints_b. Visits only the grid
+// cells each window touches: O(n * candidates-per-window), never O(n * m). Throws InvalidArgument
+// on size mismatches or incompatible descriptors.
+MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
+                        const std::vector<KeypointInfo>& keypoints_a,
+                        const DescriptorView& descriptors_a,
+                        const std::vector<KeypointInfo>& keypoints_b, const GridIndex& grid_b,
+                        const DescriptorView& descriptors_b, const GuidedMatcherOptions& options);
+
+// The whole pipeline for one frame pair: depth lookup in A (depth_a may be empty: no depth),
+// prediction, grid over B, matching. Keypoints as OpenCV gives them.
+MatchResult MatchFramesGuided(const PinholeCamera& camera, const CameraMotion& motion,
+                              const std::vector<cv::KeyPoint>& keypoints_a,
+                              const cv::Mat& descriptors_a, const cv::Mat& depth_a,
+                              const std::vector<cv::KeyPoint>& keypoints_b,
+                              const cv::Mat& descriptors_b,
+                              const PredictionOptions& prediction_options,
+                              const GuidedMatcherOptions& matcher_options);
+
+// Reusable per-frame state for a caller that matches many frames: keeps the buffers (predictions,
+// grid, keypoint copies) so steady-state matching does not reallocate them.
+class GuidedMatcherWorkspace {
+ public:
+  MatchResult Match(const PinholeCamera& camera, const CameraMotion& motion,
+                    const std::vector<cv::KeyPoint>& keypoints_a, const cv::Mat& descriptors_a,
+                    const cv::Mat& depth_a, const std::vector<cv::KeyPoint>& keypoints_b,
+                    const cv::Mat& descriptors_b, const PredictionOptions& prediction_options,
+                    const GuidedMatcherOptions& matcher_options);
+
+  const std::vector<KeypointPrediction>& predictions() const { return predictions_; }
+
+ private:
+  std::vector<KeypointInfo> info_a_, info_b_;
+  std::vector<float> depths_;
+  std::vector<KeypointPrediction> predictions_;
+  GridIndex grid_;
+};
+
+}  // namespace imumatch

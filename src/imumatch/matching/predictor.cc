@@ -1,0 +1,394 @@
+#include "imumatch/matching/predictor.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "imumatch/core/error.h"
+#include "imumatch/core/so3.h"
+
+namespace imumatch {
+
+namespace {
+constexpr double kMinForwardDepth = 1e-6;  // q_z below this counts as behind camera B
+constexpr double kRadToDeg = 57.29577951308232;
+
+double MaxEigenvalue(const Eigen::Matrix2d& c) {
+  const double half_trace = 0.5 * (c(0, 0) + c(1, 1));
+  const double half_diff = 0.5 * (c(0, 0) - c(1, 1));
+  return half_trace + std::sqrt(half_diff * half_diff + c(0, 1) * c(1, 0));
+}
+
+// Liang-Barsky: clips the segment p0 + s (p1 - p0), s in [0, 1], to the box. False when empty.
+bool ClipSegment(Eigen::Vector2d& p0, Eigen::Vector2d& p1, double x0, double y0, double x1,
+                 double y1) {
+  const Eigen::Vector2d d = p1 - p0;
+  double s0 = 0.0, s1 = 1.0;
+  const std::array<double, 4> p = {-d.x(), d.x(), -d.y(), d.y()};
+  const std::array<double, 4> q = {p0.x() - x0, x1 - p0.x(), p0.y() - y0, y1 - p0.y()};
+  for (int k = 0; k < 4; ++k) {
+    if (p[k] == 0.0) {
+      if (q[k] < 0.0) return false;
+      continue;
+    }
+    const double r = q[k] / p[k];
+    if (p[k] < 0.0) {
+      s0 = std::max(s0, r);
+    } else {
+      s1 = std::min(s1, r);
+    }
+    if (s0 > s1) return false;
+  }
+  const Eigen::Vector2d a = p0 + s0 * d, b = p0 + s1 * d;
+  p0 = a;
+  p1 = b;
+  return true;
+}
+}  // namespace
+
+void PredictionOptions::Check() const {
+  IMUMATCH_CHECK(std::isfinite(min_depth) && min_depth > 0.0, "min_depth=" << min_depth);
+  IMUMATCH_CHECK(max_depth > min_depth, "max_depth=" << max_depth << " <= min_depth");
+  IMUMATCH_CHECK(std::isfinite(segment_min_depth) && segment_min_depth > 0.0,
+                 "segment_min_depth=" << segment_min_depth);
+  IMUMATCH_CHECK(segment_max_depth > segment_min_depth,
+                 "segment_max_depth=" << segment_max_depth << " <= segment_min_depth");
+  IMUMATCH_CHECK(std::isfinite(depth_noise_coeff) && depth_noise_coeff >= 0.0,
+                 "depth_noise_coeff=" << depth_noise_coeff);
+  IMUMATCH_CHECK(std::isfinite(keypoint_sigma_px) && keypoint_sigma_px >= 0.0,
+                 "keypoint_sigma_px=" << keypoint_sigma_px);
+  IMUMATCH_CHECK(std::isfinite(octave_scale) && octave_scale >= 1.0,
+                 "octave_scale=" << octave_scale);
+  IMUMATCH_CHECK(gate_probability > 0.0 && gate_probability < 1.0,
+                 "gate_probability=" << gate_probability << " must be in (0, 1)");
+  IMUMATCH_CHECK(std::isfinite(min_half_size) && min_half_size >= 0.0,
+                 "min_half_size=" << min_half_size);
+  IMUMATCH_CHECK(std::isfinite(max_half_size) && max_half_size >= min_half_size,
+                 "max_half_size=" << max_half_size << " < min_half_size");
+  IMUMATCH_CHECK(std::isfinite(fixed_half_size) && fixed_half_size >= 0.0,
+                 "fixed_half_size=" << fixed_half_size);
+}
+
+double PredictionOptions::GateChiSquare() const { return -2.0 * std::log(1.0 - gate_probability); }
+
+const char* ToString(PredictionStatus status) {
+  switch (status) {
+    case PredictionStatus::kWithDepth:
+      return "with_depth";
+    case PredictionStatus::kWithoutDepth:
+      return "without_depth";
+    case PredictionStatus::kBehindCamera:
+      return "behind_camera";
+    case PredictionStatus::kOutsideImage:
+      return "outside_image";
+    case PredictionStatus::kInvalid:
+      return "invalid";
+  }
+  return "?";
+}
+
+float KeypointPrediction::SegmentDistanceSquared(float x, float y) const {
+  const float dx = segment_end.x() - segment_start.x(), dy = segment_end.y() - segment_start.y();
+  const float px = x - segment_start.x(), py = y - segment_start.y();
+  const float len2 = dx * dx + dy * dy;
+  float s = len2 > 0.0f ? (px * dx + py * dy) / len2 : 0.0f;
+  s = std::clamp(s, 0.0f, 1.0f);
+  const float ex = px - s * dx, ey = py - s * dy;
+  return ex * ex + ey * ey;
+}
+
+KeypointPredictor::KeypointPredictor(const PinholeCamera& camera, const CameraMotion& motion,
+                                     const PredictionOptions& options)
+    : camera_(camera), options_(options) {
+  camera.Check();
+  options.Check();
+  IMUMATCH_CHECK(motion.covariance.allFinite(), "motion covariance is not finite");
+  r_ = motion.cam_b_from_cam_a.RotationMatrix();
+  t_ = motion.cam_b_from_cam_a.translation;
+  IMUMATCH_CHECK(r_.allFinite() && t_.allFinite(), "motion is not finite");
+  motion_cov_ = motion.covariance;
+  has_motion_cov_ = !motion_cov_.isZero(0.0);
+  chi2_ = options.GateChiSquare();
+}
+
+Eigen::Vector2d KeypointPredictor::PinholeProject(const Eigen::Vector3d& q) const {
+  return Eigen::Vector2d(camera_.fx * q.x() / q.z() + camera_.cx,
+                         camera_.fy * q.y() / q.z() + camera_.cy);
+}
+
+Eigen::Matrix3d KeypointPredictor::InfiniteHomography() const {
+  const Eigen::Matrix3d k = camera_.K();
+  return k * r_ * k.inverse();
+}
+
+Eigen::Vector2d KeypointPredictor::RotationOnly(const Eigen::Vector2d& uv_a) const {
+  const Eigen::Vector2d xy = camera_.PixelToNormalized(uv_a);
+  const Eigen::Vector3d rx = r_ * Eigen::Vector3d(xy.x(), xy.y(), 1.0);
+  if (!(rx.z() > kMinForwardDepth)) return Eigen::Vector2d::Constant(std::nan(""));
+  return camera_.NormalizedToPixel(rx.head<2>() / rx.z());
+}
+
+// q = R x + rho t is the point in B up to the positive factor z (x = [x y 1], rho = 1/z); its pixel
+// is pi(q). With R_true = Exp(dtheta) R and t_true = t + dt:
+//   dq/dtheta = -Hat(R x),  dq/dt = rho I,  dq/drho = t,  dq/du_a = R e1 / fx,  dq/dv_a = R e2 /
+//   fy.
+// sigma_rho = sigma_z / z^2 (= depth_noise_coeff for the quadratic Kinect model). The keypoint's
+// localisation noise in B adds pixel_variance * I.
+Eigen::Matrix2d KeypointPredictor::Covariance(const Eigen::Vector3d& rx, double rho,
+                                              double rho_variance, double pixel_variance) const {
+  const Eigen::Vector3d q = rx + rho * t_;
+  const double iz = 1.0 / q.z();
+  Eigen::Matrix<double, 2, 3> jp;
+  jp << camera_.fx * iz, 0.0, -camera_.fx * q.x() * iz * iz, 0.0, camera_.fy * iz,
+      -camera_.fy * q.y() * iz * iz;
+  Eigen::Matrix3d cq = rho_variance * t_ * t_.transpose();
+  const Eigen::Vector3d c0 = r_.col(0) / camera_.fx, c1 = r_.col(1) / camera_.fy;
+  cq.noalias() += pixel_variance * (c0 * c0.transpose() + c1 * c1.transpose());
+  if (has_motion_cov_) {
+    Eigen::Matrix<double, 3, 6> jm;
+    jm.leftCols<3>() = -Hat(rx);
+    jm.rightCols<3>() = rho * Eigen::Matrix3d::Identity();
+    cq.noalias() += jm * motion_cov_ * jm.transpose();
+  }
+  Eigen::Matrix2d c = jp * cq * jp.transpose();
+  c(0, 0) += pixel_variance;
+  c(1, 1) += pixel_variance;
+  return c;
+}
+
+void KeypointPredictor::SetWindow(const Eigen::Matrix2d& cov, KeypointPrediction& p) const {
+  p.covariance = cov.cast<float>();
+  double hw, hh;
+  if (options_.window_mode == WindowMode::kFixed) {
+    hw = hh = options_.fixed_half_size;
+  } else {
+    hw = std::clamp(std::sqrt(chi2_ * std::max(cov(0, 0), 0.0)), options_.min_half_size,
+                    options_.max_half_size);
+    hh = std::clamp(std::sqrt(chi2_ * std::max(cov(1, 1), 0.0)), options_.min_half_size,
+                    options_.max_half_size);
+  }
+  p.min_x = static_cast<float>(p.uv.x() - hw);
+  p.max_x = static_cast<float>(p.uv.x() + hw);
+  p.min_y = static_cast<float>(p.uv.y() - hh);
+  p.max_y = static_cast<float>(p.uv.y() + hh);
+}
+
+// The local 2x2 Jacobian A = d uv_b / d uv_a of the mapping induced by a fronto-parallel plane
+// through the point (the plane homography K (R + rho t e3^T) K^-1): pi'(q) [R e1 / fx, R e2 / fy].
+// Its rotation part atan2(A10 - A01, A00 + A11) is the in-plane rotation of the image patch.
+void KeypointPredictor::SetOrientation(const Eigen::Vector3d& q, KeypointPrediction& p) const {
+  const double iz = 1.0 / q.z();
+  const double ax = iz * iz;
+  // pi'(q) applied to a 3-vector v: (fx (v.x q.z - q.x v.z), fy (v.y q.z - q.y v.z)) / q.z^2.
+  const auto dpi = [&](const Eigen::Vector3d& v) {
+    return Eigen::Vector2d(camera_.fx * (v.x() * q.z() - q.x() * v.z()) * ax,
+                           camera_.fy * (v.y() * q.z() - q.y() * v.z()) * ax);
+  };
+  const Eigen::Vector2d a0 = dpi(r_.col(0)) / camera_.fx;
+  const Eigen::Vector2d a1 = dpi(r_.col(1)) / camera_.fy;
+  p.angle_change_deg = static_cast<float>(std::atan2(a0.y() - a1.x(), a0.x() + a1.y()) * kRadToDeg);
+}
+
+KeypointPrediction KeypointPredictor::Predict(const Eigen::Vector2d& uv_a, double depth_m,
+                                              double sigma_scale) const {
+  KeypointPrediction p;
+  if (!uv_a.allFinite() || !std::isfinite(sigma_scale)) return p;
+  const Eigen::Vector2d xy = camera_.PixelToNormalized(uv_a);
+  const Eigen::Vector3d xa(xy.x(), xy.y(), 1.0);
+  const Eigen::Vector3d rx = r_ * xa;
+  const double sigma_px = options_.keypoint_sigma_px * sigma_scale;
+  const double pixel_var = sigma_px * sigma_px;
+  const double range_a = xa.norm();  // |p_a| / z
+
+  const bool has_depth =
+      std::isfinite(depth_m) && depth_m >= options_.min_depth && depth_m <= options_.max_depth;
+  if (has_depth) {
+    const double rho = 1.0 / depth_m;
+    const Eigen::Vector3d q = rx + rho * t_;
+    if (!(q.z() > kMinForwardDepth)) {
+      p.status = PredictionStatus::kBehindCamera;
+      return p;
+    }
+    const Eigen::Vector2d uv = camera_.HasDistortion()
+                                   ? camera_.NormalizedToPixel(q.head<2>() / q.z())
+                                   : PinholeProject(q);
+    p.uv = uv.cast<float>();
+    p.segment_start = p.segment_end = p.uv;
+    if (!camera_.IsInside(uv)) {
+      p.status = PredictionStatus::kOutsideImage;
+      return p;
+    }
+    p.status = PredictionStatus::kWithDepth;
+    const double sigma_rho = options_.depth_noise_coeff;  // sigma_z / z^2 with sigma_z = c z^2
+    SetWindow(Covariance(rx, rho, sigma_rho * sigma_rho, pixel_var), p);
+    SetOrientation(q, p);
+    p.scale_min = p.scale_max = static_cast<float>(range_a / q.norm());
+    return p;
+  }
+
+  if (!options_.predict_without_depth) return p;  // kInvalid
+  // Inverse-depth interval of the swept segment, cut to the part in front of camera B:
+  // q_z(rho) = rx.z + rho t.z > kMinForwardDepth.
+  double rho_lo = 1.0 / options_.segment_max_depth;  // 0 for +inf
+  double rho_hi = 1.0 / options_.segment_min_depth;
+  if (t_.z() > 0.0) {
+    rho_lo = std::max(rho_lo, (kMinForwardDepth - rx.z()) / t_.z());
+  } else if (t_.z() < 0.0) {
+    rho_hi = std::min(rho_hi, (kMinForwardDepth - rx.z()) / t_.z());
+  } else if (!(rx.z() > kMinForwardDepth)) {
+    rho_hi = -1.0;  // empty
+  }
+  if (rx.z() > kMinForwardDepth) p.uv = RotationOnly(uv_a).cast<float>();
+  if (!(rho_lo <= rho_hi)) {
+    p.status = PredictionStatus::kBehindCamera;
+    return p;
+  }
+  const Eigen::Vector3d q_near = rx + rho_hi * t_;  // the z_min end
+  const Eigen::Vector3d q_far = rx + rho_lo * t_;   // the z_max end
+  Eigen::Vector2d e0 = PinholeProject(q_near), e1 = PinholeProject(q_far);
+  if (!ClipSegment(e0, e1, -0.5, -0.5, camera_.width - 0.5, camera_.height - 0.5)) {
+    p.status = PredictionStatus::kOutsideImage;
+    return p;
+  }
+  p.status = PredictionStatus::kWithoutDepth;
+  p.segment_start = e0.cast<float>();
+  p.segment_end = e1.cast<float>();
+  const Eigen::Matrix2d c_near = Covariance(rx, rho_hi, 0.0, pixel_var);
+  const Eigen::Matrix2d c_far = Covariance(rx, rho_lo, 0.0, pixel_var);
+  const double l_near = MaxEigenvalue(c_near), l_far = MaxEigenvalue(c_far);
+  p.covariance = (l_near >= l_far ? c_near : c_far).cast<float>();
+  double r = options_.fixed_half_size;
+  if (options_.window_mode == WindowMode::kUncertainty) {
+    r = std::clamp(std::sqrt(chi2_ * std::max({l_near, l_far, 0.0})), options_.min_half_size,
+                   options_.max_half_size);
+  }
+  p.radius = static_cast<float>(r);
+  p.min_x = static_cast<float>(std::min(e0.x(), e1.x()) - r);
+  p.max_x = static_cast<float>(std::max(e0.x(), e1.x()) + r);
+  p.min_y = static_cast<float>(std::min(e0.y(), e1.y()) - r);
+  p.max_y = static_cast<float>(std::max(e0.y(), e1.y()) + r);
+  SetOrientation(rx + 0.5 * (rho_lo + rho_hi) * t_, p);
+  const double s_near = range_a / q_near.norm(), s_far = range_a / q_far.norm();
+  p.scale_min = static_cast<float>(std::min(s_near, s_far));
+  p.scale_max = static_cast<float>(std::max(s_near, s_far));
+  return p;
+}
+
+std::vector<KeypointPrediction> PredictKeypoints(const PinholeCamera& camera,
+                                                 const CameraMotion& motion,
+                                                 const std::vector<KeypointInfo>& keypoints,
+                                                 const std::vector<float>& depths_m,
+                                                 const PredictionOptions& options) {
+  IMUMATCH_CHECK(depths_m.empty() || depths_m.size() == keypoints.size(),
+                 depths_m.size() << " depths for " << keypoints.size() << " keypoints");
+  const KeypointPredictor predictor(camera, motion, options);
+  std::vector<KeypointPrediction> out(keypoints.size());
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (size_t i = 0; i < keypoints.size(); ++i) {
+    const KeypointInfo& k = keypoints[i];
+    double sigma_scale = 1.0;
+    if (options.scale_sigma_with_octave) {
+      const int level = static_cast<int8_t>(k.octave & 0xFF);
+      sigma_scale = std::pow(options.octave_scale, level);
+    }
+    out[i] = predictor.Predict(Eigen::Vector2d(k.x, k.y), depths_m.empty() ? nan : depths_m[i],
+                               sigma_scale);
+  }
+  return out;
+}
+
+namespace {
+template <typename T>
+float ReadingToMetres(T v, double inv_scale);
+template <>
+float ReadingToMetres<uint16_t>(uint16_t v, double inv_scale) {
+  return v == 0 ? std::numeric_limits<float>::quiet_NaN() : static_cast<float>(v * inv_scale);
+}
+template <>
+float ReadingToMetres<float>(float v, double) {
+  return (std::isfinite(v) && v > 0.0f) ? v : std::numeric_limits<float>::quiet_NaN();
+}
+
+template <typename T>
+float SampleTyped(const cv::Mat& depth, double inv_scale, float x, float y, DepthSampling mode) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  if (!std::isfinite(x) || !std::isfinite(y)) return nan;
+  const int cx = static_cast<int>(std::lround(x)), cy = static_cast<int>(std::lround(y));
+  if (cx < 0 || cy < 0 || cx >= depth.cols || cy >= depth.rows) return nan;
+  if (mode == DepthSampling::kNearest) {
+    const float centre = ReadingToMetres<T>(depth.at<T>(cy, cx), inv_scale);
+    if (!std::isnan(centre)) return centre;
+  }
+  std::array<float, 9> vals;
+  int n = 0;
+  float best = nan, best_d2 = std::numeric_limits<float>::infinity();
+  for (int r = std::max(cy - 1, 0); r <= std::min(cy + 1, depth.rows - 1); ++r) {
+    const T* row = depth.ptr<T>(r);
+    for (int c = std::max(cx - 1, 0); c <= std::min(cx + 1, depth.cols - 1); ++c) {
+      const float z = ReadingToMetres<T>(row[c], inv_scale);
+      if (std::isnan(z)) continue;
+      vals[n++] = z;
+      const float d2 = (c - x) * (c - x) + (r - y) * (r - y);
+      if (d2 < best_d2) {
+        best_d2 = d2;
+        best = z;
+      }
+    }
+  }
+  if (n == 0) return nan;
+  switch (mode) {
+    case DepthSampling::kNearest:
+      return best;
+    case DepthSampling::kMin3x3:
+      return *std::min_element(vals.begin(), vals.begin() + n);
+    case DepthSampling::kMedian3x3:
+      // Lower median for an even count (a real reading, never an average across an edge).
+      std::nth_element(vals.begin(), vals.begin() + (n - 1) / 2, vals.begin() + n);
+      return vals[(n - 1) / 2];
+  }
+  return nan;
+}
+
+void CheckDepthImage(const cv::Mat& depth, double depth_scale) {
+  IMUMATCH_CHECK(!depth.empty(), "empty depth image");
+  IMUMATCH_CHECK(
+      depth.type() == CV_16UC1 || depth.type() == CV_32FC1,
+      "depth image must be CV_16UC1 (raw) or CV_32FC1 (metres), got type " << depth.type());
+  IMUMATCH_CHECK(std::isfinite(depth_scale) && depth_scale > 0.0, "depth_scale=" << depth_scale);
+}
+}  // namespace
+
+float SampleDepth(const cv::Mat& depth, double depth_scale, float x, float y, DepthSampling mode) {
+  CheckDepthImage(depth, depth_scale);
+  if (depth.type() == CV_16UC1) return SampleTyped<uint16_t>(depth, 1.0 / depth_scale, x, y, mode);
+  return SampleTyped<float>(depth, 1.0, x, y, mode);
+}
+
+std::vector<float> SampleDepths(const cv::Mat& depth, double depth_scale,
+                                const std::vector<KeypointInfo>& keypoints, DepthSampling mode) {
+  CheckDepthImage(depth, depth_scale);
+  std::vector<float> out(keypoints.size());
+  const bool raw = depth.type() == CV_16UC1;
+  const double inv = 1.0 / depth_scale;
+  for (size_t i = 0; i < keypoints.size(); ++i) {
+    out[i] = raw ? SampleTyped<uint16_t>(depth, inv, keypoints[i].x, keypoints[i].y, mode)
+                 : SampleTyped<float>(depth, 1.0, keypoints[i].x, keypoints[i].y, mode);
+  }
+  return out;
+}
+
+std::vector<float> SampleDepths(const cv::Mat& depth, double depth_scale,
+                                const std::vector<cv::KeyPoint>& keypoints, DepthSampling mode) {
+  CheckDepthImage(depth, depth_scale);
+  std::vector<float> out(keypoints.size());
+  const bool raw = depth.type() == CV_16UC1;
+  const double inv = 1.0 / depth_scale;
+  for (size_t i = 0; i < keypoints.size(); ++i) {
+    const cv::Point2f& pt = keypoints[i].pt;
+    out[i] = raw ? SampleTyped<uint16_t>(depth, inv, pt.x, pt.y, mode)
+                 : SampleTyped<float>(depth, 1.0, pt.x, pt.y, mode);
+  }
+  return out;
+}
+
+}  // namespace imumatch
