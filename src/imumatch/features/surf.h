@@ -64,6 +64,15 @@ class Surf : public cv::Feature2D {
                         std::vector<cv::KeyPoint>& keypoints, cv::OutputArray descriptors,
                         bool useProvidedKeypoints = false) override;
 
+  // cv::Feature2D's detect() and compute() return silently on an empty image; these throw
+  // InvalidArgument instead, like detectAndCompute.
+  using cv::Feature2D::compute;
+  using cv::Feature2D::detect;
+  void detect(cv::InputArray image, std::vector<cv::KeyPoint>& keypoints,
+              cv::InputArray mask = cv::noArray()) override;
+  void compute(cv::InputArray image, std::vector<cv::KeyPoint>& keypoints,
+               cv::OutputArray descriptors) override;
+
   int descriptorSize() const override { return 64; }
   int descriptorType() const override { return CV_32F; }
   int defaultNorm() const override { return cv::NORM_L2; }
