@@ -63,8 +63,10 @@ Eigen::Vector2d PinholeCamera::PixelToNormalized(const Eigen::Vector2d& uv) cons
     if (r.norm() < 1e-14) break;
     Eigen::Matrix2d j;
     const double h = 1e-7;
-    j.col(0) = (distort(xy + Eigen::Vector2d(h, 0)) - distort(xy - Eigen::Vector2d(h, 0))) / (2 * h);
-    j.col(1) = (distort(xy + Eigen::Vector2d(0, h)) - distort(xy - Eigen::Vector2d(0, h))) / (2 * h);
+    j.col(0) =
+        (distort(xy + Eigen::Vector2d(h, 0)) - distort(xy - Eigen::Vector2d(h, 0))) / (2 * h);
+    j.col(1) =
+        (distort(xy + Eigen::Vector2d(0, h)) - distort(xy - Eigen::Vector2d(0, h))) / (2 * h);
     xy -= j.inverse() * r;
   }
   return xy;

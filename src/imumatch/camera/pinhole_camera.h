@@ -27,7 +27,8 @@ struct PinholeCamera {
   // Raw depth units per metre: TUM and Kinect PNGs store 5000 per metre (value / 5000 = metres).
   double depth_scale = 5000.0;
 
-  // Throws InvalidArgument for a non-positive size, focal length or depth scale, or non-finite values.
+  // Throws InvalidArgument for a non-positive size, focal length or depth scale, or non-finite
+  // values.
   void Check() const;
 
   bool HasDistortion() const;

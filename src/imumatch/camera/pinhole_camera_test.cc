@@ -11,7 +11,8 @@ namespace {
 
 TEST(PinholeCamera, ProjectsHandComputedPoint) {
   const PinholeCamera cam = PinholeCamera::KinectDefault();
-  // x = (u - cx) z / fx: the point (0.5, -0.25, 2) lands at u = 525*0.25+319.5, v = -525*0.125+239.5.
+  // x = (u - cx) z / fx: the point (0.5, -0.25, 2) lands at u = 525*0.25+319.5, v =
+  // -525*0.125+239.5.
   const auto uv = cam.Project(Eigen::Vector3d(0.5, -0.25, 2.0));
   ASSERT_TRUE(uv.has_value());
   EXPECT_NEAR(uv->x(), 450.75, 1e-12);
@@ -59,7 +60,8 @@ TEST(PinholeCamera, PixelCentreConvention) {
 }
 
 TEST(PinholeCamera, ParsesTextIntrinsics) {
-  const PinholeCamera c = ParseCameraFromText("# TUM fr1\n\n517.3 516.5 318.6 255.3 640 480\n", "x");
+  const PinholeCamera c =
+      ParseCameraFromText("# TUM fr1\n\n517.3 516.5 318.6 255.3 640 480\n", "x");
   EXPECT_DOUBLE_EQ(c.fx, 517.3);
   EXPECT_DOUBLE_EQ(c.cy, 255.3);
   EXPECT_EQ(c.width, 640);

@@ -52,11 +52,11 @@ class OutOfRange : public Error {
 }  // namespace imumatch
 
 // Throws imumatch::InvalidArgument("<expr> failed: <message>") when cond is false.
-#define IMUMATCH_CHECK(cond, message)                                                  \
-  do {                                                                                 \
-    if (!(cond)) {                                                                     \
-      std::ostringstream imumatch_check_stream_;                                       \
-      imumatch_check_stream_ << "check '" #cond "' failed: " << message;               \
-      throw ::imumatch::InvalidArgument(imumatch_check_stream_.str());                 \
-    }                                                                                  \
+#define IMUMATCH_CHECK(cond, message)                                    \
+  do {                                                                   \
+    if (!(cond)) {                                                       \
+      std::ostringstream imumatch_check_stream_;                         \
+      imumatch_check_stream_ << "check '" #cond "' failed: " << message; \
+      throw ::imumatch::InvalidArgument(imumatch_check_stream_.str());   \
+    }                                                                    \
   } while (false)

@@ -13,8 +13,10 @@ struct Rigid3d {
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
 
   Rigid3d() = default;
-  Rigid3d(const Eigen::Quaterniond& q, const Eigen::Vector3d& t) : rotation(q.normalized()), translation(t) {}
-  Rigid3d(const Eigen::Matrix3d& r, const Eigen::Vector3d& t) : rotation(Eigen::Quaterniond(r).normalized()), translation(t) {}
+  Rigid3d(const Eigen::Quaterniond& q, const Eigen::Vector3d& t)
+      : rotation(q.normalized()), translation(t) {}
+  Rigid3d(const Eigen::Matrix3d& r, const Eigen::Vector3d& t)
+      : rotation(Eigen::Quaterniond(r).normalized()), translation(t) {}
 
   Eigen::Vector3d operator*(const Eigen::Vector3d& p) const { return rotation * p + translation; }
   Rigid3d operator*(const Rigid3d& a) const {
@@ -31,8 +33,8 @@ struct Rigid3d {
     m.topRightCorner<3, 1>() = translation;
     return m;
   }
-  // Throws InvalidArgument unless the top-left block is a rotation (orthonormal, det +1, within tol)
-  // and the last row is 0 0 0 1.
+  // Throws InvalidArgument unless the top-left block is a rotation (orthonormal, det +1, within
+  // tol) and the last row is 0 0 0 1.
   static Rigid3d FromMatrix(const Eigen::Matrix4d& m, double tol = 1e-4);
   static Rigid3d Identity() { return Rigid3d(); }
 };

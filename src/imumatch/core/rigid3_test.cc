@@ -43,10 +43,10 @@ TEST(Rigid3, RotationAngleAndInterpolation) {
   const Eigen::Quaterniond a(Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitY()));
   const Eigen::Quaterniond b(Eigen::AngleAxisd(0.8, Eigen::Vector3d::UnitY()));
   EXPECT_NEAR(RotationDistance(a, b), 0.6, 1e-12);
-  const Rigid3d mid = Interpolate(Rigid3d(a, Eigen::Vector3d::Zero()),
-                                  Rigid3d(b, Eigen::Vector3d(2, 0, 0)), 0.5);
-  EXPECT_NEAR(RotationDistance(mid.rotation, Eigen::Quaterniond(Eigen::AngleAxisd(
-                                                 0.5, Eigen::Vector3d::UnitY()))),
+  const Rigid3d mid =
+      Interpolate(Rigid3d(a, Eigen::Vector3d::Zero()), Rigid3d(b, Eigen::Vector3d(2, 0, 0)), 0.5);
+  EXPECT_NEAR(RotationDistance(mid.rotation, Eigen::Quaterniond(
+                                                 Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitY()))),
               0.0, 1e-12);
   EXPECT_NEAR(mid.translation.x(), 1.0, 1e-15);
 }

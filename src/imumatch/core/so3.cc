@@ -14,7 +14,8 @@ Eigen::Quaterniond ExpSO3(const Eigen::Vector3d& omega) {
   const double theta = omega.norm();
   if (theta < 1e-8) {
     // Second-order Taylor expansion, normalised.
-    Eigen::Quaterniond q(1.0 - theta * theta / 8.0, 0.5 * omega.x(), 0.5 * omega.y(), 0.5 * omega.z());
+    Eigen::Quaterniond q(1.0 - theta * theta / 8.0, 0.5 * omega.x(), 0.5 * omega.y(),
+                         0.5 * omega.z());
     return q.normalized();
   }
   const double half = 0.5 * theta;

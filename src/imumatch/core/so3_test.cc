@@ -16,8 +16,8 @@ TEST(So3, ExpMatchesAngleAxis) {
 }
 
 TEST(So3, LogInvertsExp) {
-  for (const Eigen::Vector3d& w : {Eigen::Vector3d(0.1, -0.2, 0.3), Eigen::Vector3d(1e-9, 0, 0),
-                                  Eigen::Vector3d(0, 3.1, 0)}) {
+  for (const Eigen::Vector3d& w :
+       {Eigen::Vector3d(0.1, -0.2, 0.3), Eigen::Vector3d(1e-9, 0, 0), Eigen::Vector3d(0, 3.1, 0)}) {
     EXPECT_LT((LogSO3(ExpSO3(w)) - w).norm(), 1e-10);
   }
 }

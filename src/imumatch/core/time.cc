@@ -94,7 +94,8 @@ int64_t SecondsToNs(double seconds) {
 
 std::string FormatNsAsSeconds(int64_t t_ns) {
   const bool negative = t_ns < 0;
-  const uint64_t a = negative ? static_cast<uint64_t>(-(t_ns + 1)) + 1 : static_cast<uint64_t>(t_ns);
+  const uint64_t a =
+      negative ? static_cast<uint64_t>(-(t_ns + 1)) + 1 : static_cast<uint64_t>(t_ns);
   std::string frac = std::to_string(a % kNsPerSecond);
   frac.insert(0, 9 - frac.size(), '0');
   return (negative ? "-" : "") + std::to_string(a / kNsPerSecond) + "." + frac;

@@ -9,7 +9,8 @@ namespace imumatch::testing {
 // the IMUMATCH_DATA_DIR environment variable. Tests that need it fail with a clear message when
 // the folder is missing rather than skipping silently.
 inline std::string DataDir() {
-  if (const char* env = std::getenv("IMUMATCH_DATA_DIR"); env != nullptr && *env != '\0') return env;
+  if (const char* env = std::getenv("IMUMATCH_DATA_DIR"); env != nullptr && *env != '\0')
+    return env;
   return IMUMATCH_TEST_DATA_DIR;
 }
 
