@@ -415,8 +415,8 @@ bool DominantOrientation(const IntegralImage& ii, const cv::KeyPoint& kp, float*
 // 64-d SURF descriptor: 20s window rotated to kp.angle, 4 x 4 subregions of 5 x 5 samples spaced
 // by s, Haar responses of side 2s weighted by a Gaussian (sigma 3.3s), per subregion
 // (sum dx, sum dy, sum |dx|, sum |dy|) in the keypoint frame, L2-normalised. Responses whose
-// wavelet leaves the image count as 0.
-void ComputeDescriptor(const IntegralImage& ii, const cv::KeyPoint& kp, float* out) {
+// wavelet leaves the image count as 0. False (descriptor unusable) when every response is 0.
+bool ComputeDescriptor(const IntegralImage& ii, const cv::KeyPoint& kp, float* out) {
   const float s = 1.2f * kp.size / 9.f;
   const int half = std::max(1, static_cast<int>(std::lround(s)));
   const float angle = kp.angle * kDegToRad;
@@ -443,8 +443,10 @@ void ComputeDescriptor(const IntegralImage& ii, const cv::KeyPoint& kp, float* o
   }
   double norm2 = 0.0;
   for (int k = 0; k < 64; ++k) norm2 += static_cast<double>(out[k]) * out[k];
-  const float scale = norm2 > 0.0 ? static_cast<float>(1.0 / std::sqrt(norm2)) : 0.f;
+  if (!(norm2 > 0.0)) return false;  // no response inside the image (or a flat window)
+  const float scale = static_cast<float>(1.0 / std::sqrt(norm2));
   for (int k = 0; k < 64; ++k) out[k] *= scale;
+  return true;
 }
 
 }  // namespace
@@ -514,7 +516,7 @@ void Surf::detectAndCompute(cv::InputArray image, cv::InputArray mask,
         valid[k] = 0;
         continue;
       }
-      if (need_descriptors) ComputeDescriptor(ii, kp, desc.ptr<float>(k));
+      if (need_descriptors && !ComputeDescriptor(ii, kp, desc.ptr<float>(k))) valid[k] = 0;
     }
   });
 

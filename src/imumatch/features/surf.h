@@ -51,8 +51,13 @@ struct SurfOptions {
 // Keypoints returned by detect are sorted by decreasing response.
 //
 // compute() on given keypoints recomputes the orientation (unless upright) from the image and
-// overwrites kp.angle; keypoints with size <= 0 or whose orientation window lies outside the image
-// are removed (as OpenCV does).
+// overwrites kp.angle; keypoints with size <= 0, a non-finite position, no Haar response inside
+// the image or an all-zero descriptor window (flat or outside the image) are removed. The mask
+// only applies to detection.
+//
+// Speed: the responses of every layer and the descriptors are computed with cv::parallel_for_.
+// The response layers live in a per-thread buffer reused across calls (about 16 bytes per pixel
+// for the default options), so repeated calls do not allocate.
 class Surf : public cv::Feature2D {
  public:
   explicit Surf(const SurfOptions& options = SurfOptions());

@@ -126,6 +126,29 @@ TEST(SurfTest, RejectsEmptyOrWrongTypeImages) {
   EXPECT_THROW(surf->detect(cv::Mat(50, 50, CV_32F, cv::Scalar(1)), kps), InvalidArgument);
 }
 
+TEST(SurfTest, TinyImagesAndFarKeypointsAreHandled) {
+  for (const cv::Size size : {cv::Size(1, 1), cv::Size(5, 3), cv::Size(26, 40)}) {
+    cv::Mat img(size, CV_8U);
+    cv::randu(img, 0, 255);
+    std::vector<cv::KeyPoint> kps;
+    cv::Mat desc;
+    Surf::Create()->detectAndCompute(img, cv::noArray(), kps, desc);
+    EXPECT_TRUE(kps.empty());
+    EXPECT_EQ(desc.rows, 0);
+  }
+  // Keypoints far outside the image cannot be described, upright or not.
+  for (const bool upright : {false, true}) {
+    SurfOptions options;
+    options.upright = upright;
+    std::vector<cv::KeyPoint> kps = {cv::KeyPoint(-500.f, 10.f, 20.f),
+                                     cv::KeyPoint(100.f, 1e30f, 20.f)};
+    cv::Mat desc;
+    Surf::Create(options)->compute(TumImage(), kps, desc);
+    EXPECT_TRUE(kps.empty());
+    EXPECT_EQ(desc.rows, 0);
+  }
+}
+
 TEST(SurfTest, FlatImageHasNoKeypoints) {
   cv::Ptr<Surf> surf = Surf::Create();
   std::vector<cv::KeyPoint> kps;
