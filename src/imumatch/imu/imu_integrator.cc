@@ -144,12 +144,12 @@ PaperIntegration IntegratePaper(const std::vector<ImuSample>& samples,
 }
 
 StillInitialization InitializeFromStill(const ImuBuffer& buffer, int64_t t0_ns, int64_t t1_ns,
-                                        const ImuParams& params, double max_gyro_std,
-                                        double max_accel_std) {
+                                        const ImuParams& params, double max_gyro_drift,
+                                        double max_accel_drift) {
   params.Check();
   const std::vector<ImuSample> samples = buffer.Slice(t0_ns, t1_ns);
   const int n = static_cast<int>(samples.size());
-  IMUMATCH_CHECK(n >= 10, "a still period needs at least 10 IMU samples, got " << n);
+  IMUMATCH_CHECK(n >= 20, "a still period needs at least 20 IMU samples, got " << n);
   Eigen::Vector3d mg = Eigen::Vector3d::Zero(), ma = Eigen::Vector3d::Zero();
   for (const ImuSample& s : samples) {
     mg += s.gyro_rad_s;
@@ -157,24 +157,35 @@ StillInitialization InitializeFromStill(const ImuBuffer& buffer, int64_t t0_ns, 
   }
   mg /= n;
   ma /= n;
-  Eigen::Vector3d vg = Eigen::Vector3d::Zero(), va = Eigen::Vector3d::Zero();
-  for (const ImuSample& s : samples) {
-    vg += (s.gyro_rad_s - mg).cwiseAbs2();
-    va += (s.accel_m_s2 - ma).cwiseAbs2();
+  double gyro_drift = 0.0, accel_drift = 0.0;
+  constexpr int kBlocks = 4;
+  for (int b = 0; b < kBlocks; ++b) {
+    const int lo = b * n / kBlocks, hi = (b + 1) * n / kBlocks;
+    Eigen::Vector3d bg = Eigen::Vector3d::Zero(), ba = Eigen::Vector3d::Zero();
+    for (int k = lo; k < hi; ++k) {
+      bg += samples[k].gyro_rad_s;
+      ba += samples[k].accel_m_s2;
+    }
+    gyro_drift = std::max(gyro_drift, (bg / (hi - lo) - mg).cwiseAbs().maxCoeff());
+    accel_drift = std::max(accel_drift, (ba / (hi - lo) - ma).cwiseAbs().maxCoeff());
   }
-  const double gyro_std = std::sqrt(vg.maxCoeff() / (n - 1));
-  const double accel_std = std::sqrt(va.maxCoeff() / (n - 1));
-  IMUMATCH_CHECK(gyro_std <= max_gyro_std && accel_std <= max_accel_std,
-                 "the IMU does not look still: gyro std " << gyro_std << " rad/s, accel std "
-                                                          << accel_std << " m/s^2");
+  IMUMATCH_CHECK(gyro_drift <= max_gyro_drift && accel_drift <= max_accel_drift,
+                 "the IMU does not look still: block means of the gyro move by "
+                     << gyro_drift << " rad/s and of the accelerometer by " << accel_drift
+                     << " m/s^2");
   IMUMATCH_CHECK(ma.norm() > 1.0, "mean specific force is too small to tell gravity's direction");
+  double gyro_var = 0.0;
+  for (const ImuSample& s : samples) gyro_var += (s.gyro_rad_s - mg).squaredNorm() / 3.0;
+  gyro_var /= (n - 1);
   StillInitialization init;
   init.bias.gyro = mg;
   init.gravity_in_imu = -ma.normalized() * params.gravity_in_world.norm();
   init.world_from_imu.rotation =
       Eigen::Quaterniond::FromTwoVectors(init.gravity_in_imu, params.gravity_in_world).normalized();
-  init.gyro_bias_sigma = std::max(gyro_std, params.gyro_noise_density * std::sqrt(params.rate_hz)) /
-                         std::sqrt(static_cast<double>(n));
+  // Standard error of the mean; vibration is correlated, so never below the white-noise figure.
+  init.gyro_bias_sigma =
+      std::max(std::sqrt(gyro_var), params.gyro_noise_density * std::sqrt(params.rate_hz)) /
+      std::sqrt(static_cast<double>(n));
   init.num_samples = n;
   return init;
 }

@@ -76,8 +76,11 @@ PaperIntegration IntegratePaper(const std::vector<ImuSample>& samples,
                                 const Eigen::Vector3d& initial_velocity_in_imu);
 
 // A still period tells the gyro bias (mean gyro) and the direction of gravity in the IMU frame
-// (minus the mean specific force). Throws InvalidArgument when the period looks moving (gyro or
-// accel standard deviation above the thresholds) or has too few samples.
+// (minus the mean specific force). Stillness is judged on the means of four consecutive blocks of
+// the period, so zero-mean vibration (a drone's rotors) is accepted but real motion is not: throws
+// InvalidArgument when a block's mean gyro differs from the overall mean by more than
+// max_gyro_drift (rad/s) or its mean specific force by more than max_accel_drift (m/s^2), or when
+// the period has fewer than 20 samples.
 struct StillInitialization {
   ImuBias bias;                    // gyro bias estimated; accel bias zero (not observable)
   Eigen::Vector3d gravity_in_imu;  // points down, norm = |params.gravity_in_world|
@@ -86,7 +89,7 @@ struct StillInitialization {
   int num_samples = 0;
 };
 StillInitialization InitializeFromStill(const ImuBuffer& buffer, int64_t t0_ns, int64_t t1_ns,
-                                        const ImuParams& params, double max_gyro_std = 0.05,
-                                        double max_accel_std = 0.5);
+                                        const ImuParams& params, double max_gyro_drift = 0.02,
+                                        double max_accel_drift = 0.3);
 
 }  // namespace imumatch
