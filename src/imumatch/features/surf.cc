@@ -51,6 +51,30 @@ class IntegralImage {
   }
 
   // Haar wavelet responses (right minus left half, bottom minus top half) of side 2*half centred
+  // on the pixel corner nearest to (px, py), integer coordinates being pixel centres. False when
+  // the wavelet leaves the image.
+  bool HaarNearest(float px, float py, int half, float* hx, float* hy) const {
+    const float fx = px + 0.5f;
+    const float fy = py + 0.5f;
+    const float lo = static_cast<float>(half);
+    if (!(fx >= lo && fy >= lo && fx < static_cast<float>(width_ - half) &&
+          fy < static_cast<float>(height_ - half))) {
+      return false;  // also rejects NaN
+    }
+    const int x = static_cast<int>(fx + 0.5f);
+    const int y = static_cast<int>(fy + 0.5f);
+    if (x + half > width_ || y + half > height_) return false;
+    const uint32_t* t = Row(y - half);
+    const uint32_t* c = Row(y);
+    const uint32_t* d = Row(y + half);
+    *hx = static_cast<float>(static_cast<int32_t>((d[x + half] - 2u * d[x] + d[x - half]) -
+                                                  (t[x + half] - 2u * t[x] + t[x - half])));
+    *hy = static_cast<float>(static_cast<int32_t>((d[x + half] - 2u * c[x + half] + t[x + half]) -
+                                                  (d[x - half] - 2u * c[x - half] + t[x - half])));
+    return true;
+  }
+
+  // Haar wavelet responses (right minus left half, bottom minus top half) of side 2*half centred
   // on the sub-pixel point (px, py), integer coordinates being pixel centres. The box sums are
   // taken on the bilinearly interpolated integral image, i.e. over boxes shifted by fractions of a
   // pixel, so responses vary smoothly with the position. False when the wavelet leaves the image.
@@ -371,8 +395,8 @@ bool DominantOrientation(const IntegralImage& ii, const cv::KeyPoint& kp, float*
   for (const OrientationSample& sample : OrientationSamples()) {
     float hx = 0.f;
     float hy = 0.f;
-    if (!ii.Haar(kp.pt.x + static_cast<float>(sample.i) * s,
-                 kp.pt.y + static_cast<float>(sample.j) * s, half, &hx, &hy)) {
+    if (!ii.HaarNearest(kp.pt.x + static_cast<float>(sample.i) * s,
+                        kp.pt.y + static_cast<float>(sample.j) * s, half, &hx, &hy)) {
       continue;
     }
     hx *= sample.weight;

@@ -333,14 +333,23 @@ TEST_P(SurfRotationTest, RecoversRotationHomographyAndAngles) {
   const MatchResult m = RatioMatch(kp1, d1, kp2, d2, cv::NORM_L2);
   ASSERT_GT(m.matches.size(), 100u);
   std::vector<uint8_t> inliers;
-  const cv::Mat h = cv::findHomography(m.pts1, m.pts2, cv::RANSAC, 3.0, inliers, 2000, 0.999);
+  const cv::Mat h =
+      cv::findHomography(m.pts1, m.pts2, cv::USAC_ACCURATE, 3.0, inliers, 2000, 0.999);
   ASSERT_FALSE(h.empty());
   const int n_inliers = cv::countNonZero(inliers);
-  const double inlier_ratio = static_cast<double>(n_inliers) / m.matches.size();
-  std::printf("rotation %.0f deg: %zu/%zu keypoints, %zu matches, %d inliers (%.2f)\n", degrees,
-              kp1.size(), kp2.size(), m.matches.size(), n_inliers, inlier_ratio);
-  EXPECT_GT(inlier_ratio, 0.6);
-  EXPECT_LT(CornerError(cv::Matx33d(h), truth, img.size()), 3.0);
+  int n_true = 0;  // matches consistent with the true rotation
+  for (size_t i = 0; i < m.pts1.size(); ++i) {
+    n_true += cv::norm(Apply(truth, m.pts1[i]) - cv::Point2d(m.pts2[i])) < 3.0 ? 1 : 0;
+  }
+  const double true_ratio = static_cast<double>(n_true) / m.matches.size();
+  std::printf("rotation %.0f deg: %zu/%zu keypoints, %zu matches, %d inliers, %d correct (%.2f)\n",
+              degrees, kp1.size(), kp2.size(), m.matches.size(), n_inliers, n_true, true_ratio);
+  EXPECT_GT(true_ratio, 0.65);
+  EXPECT_GT(n_inliers, 0.8 * n_true);
+  // The corners lie partly outside the rotated content: the homography is extrapolated there.
+  const double corner_error = CornerError(cv::Matx33d(h), truth, img.size());
+  std::printf("  corner error %.2f px\n", corner_error);
+  EXPECT_LT(corner_error, 3.0);
 
   // Keypoint angles follow the image rotation: a counter-clockwise rotation by a on screen
   // subtracts a from OpenCV angles (measured clockwise, y down).
@@ -383,7 +392,8 @@ TEST(SurfTest, ScaleByTwoDoublesKeypointSizes) {
   const MatchResult m = RatioMatch(kp1, d1, kp2, d2, cv::NORM_L2);
   ASSERT_GT(m.matches.size(), 40u);
   std::vector<uint8_t> inliers;
-  const cv::Mat h = cv::findHomography(m.pts1, m.pts2, cv::RANSAC, 3.0, inliers, 2000, 0.999);
+  const cv::Mat h =
+      cv::findHomography(m.pts1, m.pts2, cv::USAC_ACCURATE, 3.0, inliers, 2000, 0.999);
   ASSERT_FALSE(h.empty());
   const double inlier_ratio = static_cast<double>(cv::countNonZero(inliers)) / m.matches.size();
   std::printf("scale 2: %zu/%zu keypoints, %zu matches, inlier ratio %.2f\n", kp1.size(),
