@@ -1,0 +1,251 @@
+#include "imumatch/io/euroc.h"
+
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include <yaml-cpp/yaml.h>
+
+#include "imumatch/core/error.h"
+#include "imumatch/io/text_parsing.h"
+
+namespace imumatch {
+namespace {
+
+namespace fs = std::filesystem;
+
+int LineOf(const YAML::Node& node) { return node.Mark().line >= 0 ? node.Mark().line + 1 : 0; }
+
+// Loads a Kalibr/OpenCV style YAML file; the "%YAML:1.0" first line becomes a comment so yaml-cpp
+// accepts it and line numbers stay those of the file.
+YAML::Node LoadOpenCvYaml(const std::string& path) {
+  std::string text = ReadFileToString(path);
+  if (text.rfind("%YAML", 0) == 0) text[0] = '#';
+  try {
+    YAML::Node root = YAML::Load(text);
+    if (!root.IsMap()) throw InputError(path, "expected a YAML mapping of keys to values");
+    return root;
+  } catch (const YAML::Exception& e) {
+    throw InputError(path, e.mark.line >= 0 ? e.mark.line + 1 : 0, "YAML error: " + e.msg);
+  }
+}
+
+// map[key], or InputError "missing key": with no line for a top-level key, with the line of the
+// enclosing mapping for a nested one (parent names it).
+YAML::Node Require(const YAML::Node& map, const std::string& key, const std::string& path,
+                   const std::string& parent = "") {
+  const YAML::Node node = map[key];
+  if (!node.IsDefined() || node.IsNull()) {
+    if (parent.empty()) throw InputError(path, "missing key '" + key + "'");
+    throw InputError(path, LineOf(map), "missing key '" + key + "' in '" + parent + "'");
+  }
+  return node;
+}
+
+double ScalarToDouble(const YAML::Node& node, const std::string& what, const std::string& path) {
+  if (!node.IsScalar()) throw InputError(path, LineOf(node), what + ": expected a number");
+  return ParseFiniteDouble(node.Scalar(), path, LineOf(node), what);
+}
+
+double GetDouble(const YAML::Node& map, const std::string& key, const std::string& path,
+                 const std::string& parent = "") {
+  return ScalarToDouble(Require(map, key, path, parent), key, path);
+}
+
+std::string GetString(const YAML::Node& map, const std::string& key, const std::string& path) {
+  const YAML::Node node = Require(map, key, path);
+  if (!node.IsScalar()) throw InputError(path, LineOf(node), key + ": expected a text value");
+  return node.Scalar();
+}
+
+std::vector<double> GetDoubles(const YAML::Node& map, const std::string& key,
+                               const std::string& path, size_t min_size, size_t max_size,
+                               const std::string& parent = "") {
+  const YAML::Node node = Require(map, key, path, parent);
+  if (!node.IsSequence())
+    throw InputError(path, LineOf(node), key + ": expected a list [a, b, ...]");
+  if (node.size() < min_size || node.size() > max_size) {
+    std::ostringstream msg;
+    msg << key << ": expected ";
+    if (min_size == max_size) {
+      msg << min_size;
+    } else {
+      msg << min_size << " to " << max_size;
+    }
+    msg << " numbers, got " << node.size();
+    throw InputError(path, LineOf(node), msg.str());
+  }
+  std::vector<double> values;
+  for (size_t i = 0; i < node.size(); ++i) {
+    values.push_back(ScalarToDouble(node[i], key + "[" + std::to_string(i) + "]", path));
+  }
+  return values;
+}
+
+Rigid3d GetTransform(const YAML::Node& map, const std::string& key, const std::string& path) {
+  const YAML::Node node = Require(map, key, path);
+  if (!node.IsMap()) throw InputError(path, LineOf(node), key + ": expected rows, cols and data");
+  if (GetDouble(node, "rows", path, key) != 4 || GetDouble(node, "cols", path, key) != 4) {
+    throw InputError(path, LineOf(node), key + ": expected a 4x4 matrix");
+  }
+  const std::vector<double> data = GetDoubles(node, "data", path, 16, 16, key);
+  Eigen::Matrix4d m;
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) m(r, c) = data[static_cast<size_t>(4 * r + c)];
+  }
+  try {
+    return Rigid3d::FromMatrix(m, 1e-6);
+  } catch (const InvalidArgument& e) {
+    throw InputError(path, LineOf(node["data"]), key + " is not a rigid transform: " + e.what());
+  }
+}
+
+}  // namespace
+
+ImuBuffer ReadEurocImu(const std::string& path, const ImuBufferOptions& options) {
+  static const char* kNames[] = {"w_x", "w_y", "w_z", "a_x", "a_y", "a_z"};
+  ImuBuffer buffer(options);
+  for (const TextLine& line : ReadTextFields(path, FieldSeparator::kComma)) {
+    CheckFieldCount(line, 7, path, "timestamp [ns], w x y z [rad/s], a x y z [m/s^2]");
+    ImuSample s;
+    s.t_ns = ParseNsField(line.fields[0], path, line.line);
+    double v[6];
+    for (int i = 0; i < 6; ++i)
+      v[i] = ParseFiniteDouble(line.fields[i + 1], path, line.line, kNames[i]);
+    s.gyro_rad_s = Eigen::Vector3d(v[0], v[1], v[2]);
+    s.accel_m_s2 = Eigen::Vector3d(v[3], v[4], v[5]);
+    buffer.Push(s, path, line.line);
+  }
+  if (buffer.empty()) throw InputError(path, "no IMU samples found");
+  return buffer;
+}
+
+std::vector<StampedFile> ReadEurocImageList(const std::string& path) {
+  std::vector<StampedFile> files;
+  for (const TextLine& line : ReadTextFields(path, FieldSeparator::kComma)) {
+    CheckFieldCount(line, 2, path, "timestamp [ns], filename");
+    StampedFile f;
+    f.t_ns = ParseNsField(line.fields[0], path, line.line);
+    if (!files.empty()) {
+      CheckIncreasingTimestamp(files.back().t_ns, files.back().line, f.t_ns, path, line.line);
+    }
+    f.path = line.fields[1];
+    f.line = line.line;
+    files.push_back(std::move(f));
+  }
+  if (files.empty()) throw InputError(path, "no images listed");
+  return files;
+}
+
+EurocCameraSensor ReadEurocCameraSensor(const std::string& path) {
+  const YAML::Node root = LoadOpenCvYaml(path);
+  const std::string model = GetString(root, "camera_model", path);
+  if (model != "pinhole") {
+    throw InputError(path, LineOf(root["camera_model"]),
+                     "camera_model '" + model + "' is not supported (only 'pinhole')");
+  }
+  EurocCameraSensor sensor;
+  const std::vector<double> k = GetDoubles(root, "intrinsics", path, 4, 4);
+  sensor.camera.fx = k[0];
+  sensor.camera.fy = k[1];
+  sensor.camera.cx = k[2];
+  sensor.camera.cy = k[3];
+  const std::vector<double> size = GetDoubles(root, "resolution", path, 2, 2);
+  if (size[0] != std::floor(size[0]) || size[1] != std::floor(size[1]) || size[0] < 1 ||
+      size[1] < 1 || size[0] > 1e5 || size[1] > 1e5) {
+    throw InputError(path, LineOf(root["resolution"]),
+                     "resolution must be two positive whole numbers [width, height]");
+  }
+  sensor.camera.width = static_cast<int>(size[0]);
+  sensor.camera.height = static_cast<int>(size[1]);
+  const std::string distortion_model = GetString(root, "distortion_model", path);
+  if (distortion_model != "radial-tangential" && distortion_model != "radtan" &&
+      distortion_model != "plumb_bob") {
+    throw InputError(path, LineOf(root["distortion_model"]),
+                     "distortion_model '" + distortion_model +
+                         "' is not supported (only radial-tangential k1 k2 p1 p2 [k3])");
+  }
+  const std::vector<double> d = GetDoubles(root, "distortion_coefficients", path, 4, 5);
+  for (size_t i = 0; i < d.size(); ++i) sensor.camera.distortion[i] = d[i];
+  try {
+    sensor.camera.Check();
+  } catch (const InvalidArgument& e) {
+    throw InputError(path, LineOf(root["intrinsics"]), e.what());
+  }
+  sensor.body_from_sensor = GetTransform(root, "T_BS", path);
+  sensor.rate_hz = GetDouble(root, "rate_hz", path);
+  if (sensor.rate_hz <= 0) throw InputError(path, LineOf(root["rate_hz"]), "rate_hz must be > 0");
+  return sensor;
+}
+
+EurocImuSensor ReadEurocImuSensor(const std::string& path) {
+  const YAML::Node root = LoadOpenCvYaml(path);
+  EurocImuSensor sensor;
+  sensor.params.gyro_noise_density = GetDouble(root, "gyroscope_noise_density", path);
+  sensor.params.gyro_random_walk = GetDouble(root, "gyroscope_random_walk", path);
+  sensor.params.accel_noise_density = GetDouble(root, "accelerometer_noise_density", path);
+  sensor.params.accel_random_walk = GetDouble(root, "accelerometer_random_walk", path);
+  sensor.params.rate_hz = GetDouble(root, "rate_hz", path);
+  try {
+    sensor.params.Check();
+  } catch (const InvalidArgument& e) {
+    throw InputError(path, e.what());
+  }
+  sensor.body_from_sensor = GetTransform(root, "T_BS", path);
+  return sensor;
+}
+
+std::vector<EurocGroundTruthState> ReadEurocGroundTruth(const std::string& path) {
+  std::vector<EurocGroundTruthState> states;
+  int previous_line = 0;
+  for (const TextLine& line : ReadTextFields(path, FieldSeparator::kComma)) {
+    CheckFieldCount(line, 17, path, "timestamp, p x y z, q w x y z, v x y z, bw x y z, ba x y z");
+    EurocGroundTruthState s;
+    s.t_ns = ParseNsField(line.fields[0], path, line.line);
+    if (!states.empty()) {
+      CheckIncreasingTimestamp(states.back().t_ns, previous_line, s.t_ns, path, line.line);
+    }
+    double v[16];
+    for (int i = 0; i < 16; ++i) {
+      v[i] = ParseFiniteDouble(line.fields[static_cast<size_t>(i + 1)], path, line.line,
+                               "field " + std::to_string(i + 2));
+    }
+    s.world_from_body.translation = Eigen::Vector3d(v[0], v[1], v[2]);
+    s.world_from_body.rotation = CheckedUnitQuaternion(v[3], v[4], v[5], v[6], path, line.line);
+    s.velocity_in_world = Eigen::Vector3d(v[7], v[8], v[9]);
+    s.gyro_bias = Eigen::Vector3d(v[10], v[11], v[12]);
+    s.accel_bias = Eigen::Vector3d(v[13], v[14], v[15]);
+    states.push_back(s);
+    previous_line = line.line;
+  }
+  return states;
+}
+
+std::string FindEurocMav0(const std::string& path) {
+  std::error_code ec;
+  const fs::path p(path);
+  if (fs::is_directory(p / "mav0", ec)) return (p / "mav0").string();
+  if (fs::exists(p / "imu0" / "data.csv", ec) || fs::exists(p / "cam0" / "data.csv", ec)) {
+    return p.string();
+  }
+  return "";
+}
+
+EurocSequence ReadEurocSequence(const std::string& path, const ImuBufferOptions& options) {
+  const std::string mav0 = FindEurocMav0(path);
+  if (mav0.empty()) {
+    throw InputError(path, "not a EuRoC folder (expected mav0/ or imu0/ and cam0/ inside)");
+  }
+  EurocSequence seq;
+  seq.mav0 = mav0;
+  seq.cam0 = ReadEurocCameraSensor(mav0 + "/cam0/sensor.yaml");
+  seq.imu0 = ReadEurocImuSensor(mav0 + "/imu0/sensor.yaml");
+  seq.images = ReadEurocImageList(mav0 + "/cam0/data.csv");
+  seq.imu = ReadEurocImu(mav0 + "/imu0/data.csv", options);
+  std::error_code ec;
+  const std::string gt = mav0 + "/state_groundtruth_estimate0/data.csv";
+  if (fs::exists(gt, ec)) seq.groundtruth = ReadEurocGroundTruth(gt);
+  return seq;
+}
+
+}  // namespace imumatch

@@ -1,0 +1,243 @@
+#include "imumatch/io/euroc.h"
+
+#include <gtest/gtest.h>
+
+#include "imumatch/core/error.h"
+#include "imumatch/core/time.h"
+#include "imumatch/io/image_io.h"
+#include "imumatch/io/io_test_util.h"
+#include "imumatch/testing/test_data.h"
+
+namespace imumatch {
+namespace {
+
+using testing::DataPath;
+using testing::ExpectInputError;
+using testing::TempDir;
+
+const char* const kCsvHeader =
+    "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
+    "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]\n";
+
+TEST(Euroc, RealImuLogParsesFully) {
+  const ImuBuffer imu = ReadEurocImu(DataPath("euroc_v101_excerpt/mav0/imu0/data.csv"));
+  ASSERT_EQ(imu.size(), 29120u);
+  // First and last rows of the file, copied by hand.
+  const ImuSample& first = imu.samples().front();
+  EXPECT_EQ(first.t_ns, 1403715273262142976LL);
+  EXPECT_DOUBLE_EQ(first.gyro_rad_s.x(), -0.0020943951023931952);
+  EXPECT_DOUBLE_EQ(first.gyro_rad_s.y(), 0.017453292519943295);
+  EXPECT_DOUBLE_EQ(first.gyro_rad_s.z(), 0.07749261878854824);
+  EXPECT_DOUBLE_EQ(first.accel_m_s2.x(), 9.0874956666666655);
+  EXPECT_DOUBLE_EQ(first.accel_m_s2.y(), 0.13075533333333333);
+  EXPECT_DOUBLE_EQ(first.accel_m_s2.z(), -3.6938381666666662);
+  const ImuSample& last = imu.samples().back();
+  EXPECT_EQ(last.t_ns, 1403715418857143040LL);
+  EXPECT_DOUBLE_EQ(last.gyro_rad_s.x(), -0.00069813170079773186);
+  EXPECT_DOUBLE_EQ(last.gyro_rad_s.y(), 0.023736477827122883);
+  EXPECT_DOUBLE_EQ(last.gyro_rad_s.z(), 0.074001960284559576);
+  EXPECT_DOUBLE_EQ(last.accel_m_s2.x(), 9.1610455416666667);
+  EXPECT_DOUBLE_EQ(last.accel_m_s2.y(), 0.26151066666666667);
+  EXPECT_DOUBLE_EQ(last.accel_m_s2.z(), -3.2035056666666666);
+  // 200 Hz over 145.6 s.
+  EXPECT_NEAR(NsToSeconds(imu.end_ns() - imu.begin_ns()), 29119 * 0.005, 0.01);
+}
+
+TEST(Euroc, RealCameraListAndImages) {
+  const std::vector<StampedFile> list =
+      ReadEurocImageList(DataPath("euroc_v101_excerpt/mav0/cam0/data.csv"));
+  ASSERT_EQ(list.size(), 20u);
+  EXPECT_EQ(list.front().t_ns, 1403715273262142976LL);
+  EXPECT_EQ(list.front().path, "1403715273262142976.png");
+  EXPECT_EQ(list.back().t_ns, 1403715274212143104LL);
+  for (const StampedFile& f : list) {
+    const cv::Mat image = LoadImage(DataPath("euroc_v101_excerpt/mav0/cam0/data/" + f.path));
+    EXPECT_EQ(image.size(), cv::Size(752, 480)) << f.path;
+  }
+}
+
+TEST(Euroc, RealCameraSensorYaml) {
+  const EurocCameraSensor cam =
+      ReadEurocCameraSensor(DataPath("euroc_v101_excerpt/mav0/cam0/sensor.yaml"));
+  EXPECT_DOUBLE_EQ(cam.camera.fx, 458.654);
+  EXPECT_DOUBLE_EQ(cam.camera.fy, 457.296);
+  EXPECT_DOUBLE_EQ(cam.camera.cx, 367.215);
+  EXPECT_DOUBLE_EQ(cam.camera.cy, 248.375);
+  EXPECT_EQ(cam.camera.width, 752);
+  EXPECT_EQ(cam.camera.height, 480);
+  EXPECT_DOUBLE_EQ(cam.camera.distortion[0], -0.28340811);
+  EXPECT_DOUBLE_EQ(cam.camera.distortion[1], 0.07395907);
+  EXPECT_DOUBLE_EQ(cam.camera.distortion[2], 0.00019359);
+  EXPECT_DOUBLE_EQ(cam.camera.distortion[3], 1.76187114e-05);
+  EXPECT_DOUBLE_EQ(cam.camera.distortion[4], 0.0);
+  EXPECT_DOUBLE_EQ(cam.rate_hz, 20.0);
+  // T_BS: translation as in the file; rotation close to the file's matrix and orthonormal.
+  EXPECT_DOUBLE_EQ(cam.body_from_sensor.translation.x(), -0.0216401454975);
+  EXPECT_DOUBLE_EQ(cam.body_from_sensor.translation.y(), -0.064676986768);
+  EXPECT_DOUBLE_EQ(cam.body_from_sensor.translation.z(), 0.00981073058949);
+  const Eigen::Matrix3d r = cam.body_from_sensor.RotationMatrix();
+  EXPECT_NEAR(r(0, 1), -0.999880929698, 1e-6);
+  EXPECT_NEAR(r(1, 0), 0.999557249008, 1e-6);
+  EXPECT_NEAR(r(2, 2), 0.999660727178, 1e-6);
+  EXPECT_LT((r * r.transpose() - Eigen::Matrix3d::Identity()).norm(), 1e-12);
+  EXPECT_NEAR(r.determinant(), 1.0, 1e-12);
+}
+
+TEST(Euroc, RealImuSensorYaml) {
+  const EurocImuSensor imu =
+      ReadEurocImuSensor(DataPath("euroc_v101_excerpt/mav0/imu0/sensor.yaml"));
+  EXPECT_DOUBLE_EQ(imu.params.gyro_noise_density, 1.6968e-4);
+  EXPECT_DOUBLE_EQ(imu.params.gyro_random_walk, 1.9393e-5);
+  EXPECT_DOUBLE_EQ(imu.params.accel_noise_density, 2.0e-3);
+  EXPECT_DOUBLE_EQ(imu.params.accel_random_walk, 3.0e-3);
+  EXPECT_DOUBLE_EQ(imu.params.rate_hz, 200.0);
+  EXPECT_TRUE(imu.body_from_sensor.rotation.isApprox(Eigen::Quaterniond::Identity()));
+  EXPECT_EQ(imu.body_from_sensor.translation, Eigen::Vector3d::Zero());
+}
+
+TEST(Euroc, RealSequenceWithoutGroundTruth) {
+  for (const std::string& path :
+       {DataPath("euroc_v101_excerpt"), DataPath("euroc_v101_excerpt/mav0")}) {
+    EXPECT_EQ(FindEurocMav0(path), DataPath("euroc_v101_excerpt/mav0"));
+  }
+  const EurocSequence seq = ReadEurocSequence(DataPath("euroc_v101_excerpt"));
+  EXPECT_EQ(seq.images.size(), 20u);
+  EXPECT_EQ(seq.imu.size(), 29120u);
+  EXPECT_TRUE(seq.groundtruth.empty());
+  // imu0's T_BS is the identity, so cam_from_imu is the inverse of cam0's T_BS: the IMU origin
+  // (body origin) seen from the camera is -R^T t.
+  const Rigid3d cam_from_imu = seq.CamFromImu();
+  const Rigid3d& body_from_cam = seq.cam0.body_from_sensor;
+  EXPECT_LT((cam_from_imu * body_from_cam.translation).norm(), 1e-12);
+  EXPECT_LT(
+      (body_from_cam * (cam_from_imu * Eigen::Vector3d(1, 2, 3)) - Eigen::Vector3d(1, 2, 3)).norm(),
+      1e-12);
+  EXPECT_EQ(seq.ImagePath(seq.images[0]),
+            DataPath("euroc_v101_excerpt/mav0/cam0/data/1403715273262142976.png"));
+  EXPECT_TRUE(FindEurocMav0(DataPath("tum_fr1_xyz_pair")).empty());
+  ExpectInputError([&] { ReadEurocSequence(DataPath("tum_fr1_xyz_pair")); },
+                   DataPath("tum_fr1_xyz_pair"), 0, "not a EuRoC folder");
+}
+
+TEST(Euroc, ImuCsvMissingFile) {
+  TempDir dir;
+  const std::string path = dir.Path("imu0/data.csv");
+  ExpectInputError([&] { ReadEurocImu(path); }, path, 0, "not found");
+}
+
+TEST(Euroc, ImuCsvWrongFieldCount) {
+  TempDir dir;
+  const std::string path =
+      dir.Write("data.csv", std::string(kCsvHeader) + "1000,0,0,0,0,0,9.8\n2000,0,0,0,0,9.8\n");
+  ExpectInputError([&] { ReadEurocImu(path); }, path, 3, "expected 7 fields");
+  const std::string empty_field =
+      dir.Write("b.csv", std::string(kCsvHeader) + "1000,0,,0,0,0,9.8\n");
+  ExpectInputError([&] { ReadEurocImu(empty_field); }, empty_field, 2, "empty field 3");
+}
+
+TEST(Euroc, ImuCsvNonNumericAndNaN) {
+  TempDir dir;
+  const std::string text = dir.Write("a.csv", "1000,0,0,0,0,0,9.8\n2000,0,0,0,0,0,9.8m\n");
+  ExpectInputError([&] { ReadEurocImu(text); }, text, 2, "a_z: '9.8m' is not a number");
+  const std::string float_t = dir.Write("b.csv", "1000.5,0,0,0,0,0,9.8\n");
+  ExpectInputError([&] { ReadEurocImu(float_t); }, float_t, 1, "nanoseconds");
+  const std::string nan = dir.Write("c.csv", "1000,0,0,0,0,0,9.8\r\n2000,NaN,0,0,0,0,9.8\r\n");
+  ExpectInputError([&] { ReadEurocImu(nan); }, nan, 2, "w_x");
+}
+
+TEST(Euroc, ImuCsvUnsortedAndDuplicate) {
+  TempDir dir;
+  const std::string unsorted =
+      dir.Write("a.csv", "1000,0,0,0,0,0,9.8\n3000,0,0,0,0,0,9.8\n2000,0,0,0,0,0,9.8\n");
+  ExpectInputError([&] { ReadEurocImu(unsorted); }, unsorted, 3, "out-of-order");
+  const std::string dup = dir.Write("b.csv", "1000,0,0,0,0,0,9.8\n1000,0,0,0,0,0,9.8\n");
+  ExpectInputError([&] { ReadEurocImu(dup); }, dup, 2, "duplicate");
+}
+
+TEST(Euroc, ImageListErrors) {
+  TempDir dir;
+  const std::string fields = dir.Write("a.csv", "#timestamp [ns],filename\n1000,1000.png,x\n");
+  ExpectInputError([&] { ReadEurocImageList(fields); }, fields, 2, "expected 2 fields");
+  const std::string dup = dir.Write("b.csv", "1000,1000.png\n1000,1001.png\n");
+  ExpectInputError([&] { ReadEurocImageList(dup); }, dup, 2, "duplicate");
+  const std::string unsorted = dir.Write("c.csv", "2000,2000.png\n1000,1000.png\n");
+  ExpectInputError([&] { ReadEurocImageList(unsorted); }, unsorted, 2, "before the previous");
+  const std::string empty = dir.Write("d.csv", "#timestamp [ns],filename\n");
+  ExpectInputError([&] { ReadEurocImageList(empty); }, empty, 0, "no images");
+}
+
+std::string CameraYaml(const std::string& t_bs_row0, const std::string& distortion_model) {
+  return "%YAML:1.0\n"            // 1
+         "sensor_type: camera\n"  // 2
+         "T_BS:\n"                // 3
+         "  cols: 4\n"            // 4
+         "  rows: 4\n"            // 5
+         "  data: [" +
+         t_bs_row0 +
+         ",\n"                                                 // 6
+         "         0.0, 1.0, 0.0, 0.0,\n"                      // 7
+         "         0.0, 0.0, 1.0, 0.0,\n"                      // 8
+         "         0.0, 0.0, 0.0, 1.0]\n"                      // 9
+         "rate_hz: 20\n"                                       // 10
+         "resolution: [752, 480]\n"                            // 11
+         "camera_model: pinhole\n"                             // 12
+         "intrinsics: [458.654, 457.296, 367.215, 248.375]\n"  // 13
+         "distortion_model: " +
+         distortion_model +
+         "\n"                                                          // 14
+         "distortion_coefficients: [-0.28, 0.07, 0.0002, 1.7e-05]\n";  // 15
+}
+
+TEST(Euroc, SensorYamlErrors) {
+  TempDir dir;
+  const std::string ok =
+      dir.Write("ok.yaml", CameraYaml("1.0, 0.0, 0.0, 0.1", "radial-tangential"));
+  EXPECT_DOUBLE_EQ(ReadEurocCameraSensor(ok).body_from_sensor.translation.x(), 0.1);
+  // A rotation block that is not orthonormal: error on the data line.
+  const std::string skew =
+      dir.Write("a.yaml", CameraYaml("1.0, 0.1, 0.0, 0.1", "radial-tangential"));
+  ExpectInputError([&] { ReadEurocCameraSensor(skew); }, skew, 6, "T_BS is not a rigid transform");
+  const std::string fisheye = dir.Write("b.yaml", CameraYaml("1.0, 0.0, 0.0, 0.1", "equidistant"));
+  ExpectInputError([&] { ReadEurocCameraSensor(fisheye); }, fisheye, 14, "not supported");
+  const std::string short_row = dir.Write("c.yaml", CameraYaml("1.0, 0.0, 0.0", "radtan"));
+  ExpectInputError([&] { ReadEurocCameraSensor(short_row); }, short_row, 6,
+                   "expected 16 numbers, got 15");
+  const std::string text_value = dir.Write("d.yaml", CameraYaml("1.0, 0.0, 0.0, abc", "radtan"));
+  ExpectInputError([&] { ReadEurocCameraSensor(text_value); }, text_value, 6, "'abc'");
+  const std::string syntax = dir.Write("e.yaml", "%YAML:1.0\nrate_hz: 20\nintrinsics: [1, 2\n");
+  ExpectInputError([&] { ReadEurocCameraSensor(syntax); }, syntax, 4, "YAML error");
+  const std::string no_key = dir.Write("f.yaml", "%YAML:1.0\nsensor_type: imu\nrate_hz: 200\n");
+  ExpectInputError([&] { ReadEurocImuSensor(no_key); }, no_key, 0,
+                   "missing key 'gyroscope_noise_density'");
+  const std::string missing = dir.Path("none.yaml");
+  ExpectInputError([&] { ReadEurocImuSensor(missing); }, missing, 0, "not found");
+}
+
+TEST(Euroc, GroundTruthCsvHasQuaternionWFirst) {
+  TempDir dir;
+  // 90 degrees about z: w = x... = cos 45, z = sin 45.
+  const std::string path = dir.Write(
+      "data.csv",
+      "#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], "
+      "q_RS_z [], v_RS_R_x [m s^-1], v_RS_R_y [m s^-1], v_RS_R_z [m s^-1], b_w_RS_S_x [rad s^-1], "
+      "b_w_RS_S_y [rad s^-1], b_w_RS_S_z [rad s^-1], b_a_RS_S_x [m s^-2], b_a_RS_S_y [m s^-2], "
+      "b_a_RS_S_z [m s^-2]\n"
+      "1403715274302142976,0.878612,2.142470,0.947262,0.7071068,0.0,0.0,0.7071068,0.009474,"
+      "-0.014009,-0.002145,-0.002229,0.020700,0.076350,-0.012492,0.547666,0.069073\n");
+  const std::vector<EurocGroundTruthState> gt = ReadEurocGroundTruth(path);
+  ASSERT_EQ(gt.size(), 1u);
+  EXPECT_EQ(gt[0].t_ns, 1403715274302142976LL);
+  EXPECT_DOUBLE_EQ(gt[0].world_from_body.translation.y(), 2.142470);
+  EXPECT_LT((gt[0].world_from_body * Eigen::Vector3d(1, 0, 0) -
+             Eigen::Vector3d(0.878612, 3.142470, 0.947262))
+                .norm(),
+            1e-6);
+  EXPECT_DOUBLE_EQ(gt[0].velocity_in_world.x(), 0.009474);
+  EXPECT_DOUBLE_EQ(gt[0].gyro_bias.z(), 0.076350);
+  EXPECT_DOUBLE_EQ(gt[0].accel_bias.y(), 0.547666);
+  const std::string bad_q = dir.Write("b.csv", "1,0,0,0,0.5,0,0,0.5,0,0,0,0,0,0,0,0,0\n");
+  ExpectInputError([&] { ReadEurocGroundTruth(bad_q); }, bad_q, 1, "norm");
+}
+
+}  // namespace
+}  // namespace imumatch

@@ -1,0 +1,148 @@
+#include "imumatch/io/image_io.h"
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <sstream>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "imumatch/core/error.h"
+
+namespace imumatch {
+namespace {
+
+std::string SizeText(const cv::Size& s) {
+  std::ostringstream out;
+  out << s.width << "x" << s.height;
+  return out.str();
+}
+
+std::string DepthText(int depth) {
+  switch (depth) {
+    case CV_8U:
+      return "8-bit unsigned";
+    case CV_8S:
+      return "8-bit signed";
+    case CV_16U:
+      return "16-bit unsigned";
+    case CV_16S:
+      return "16-bit signed";
+    case CV_32F:
+      return "32-bit float";
+    default:
+      return "type " + std::to_string(depth);
+  }
+}
+
+// imread with the checks every loader shares.
+cv::Mat ReadChecked(const std::string& path, int flags) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError(path, "image file not found");
+  if (fs::is_directory(path, ec)) throw InputError(path, "is a folder, not an image file");
+  const auto bytes = fs::file_size(path, ec);
+  if (!ec && bytes == 0) throw InputError(path, "image file is empty (0 bytes)");
+  cv::Mat image;
+  try {
+    image = cv::imread(path, flags);
+  } catch (const cv::Exception& e) {
+    throw InputError(path, std::string("cannot decode image: ") + e.what());
+  }
+  if (image.empty()) {
+    throw InputError(path, "cannot decode image (unreadable, truncated or not an image format)");
+  }
+  return image;
+}
+
+}  // namespace
+
+cv::Mat LoadImage(const std::string& path, ImageColor color) {
+  const cv::Mat raw = ReadChecked(path, cv::IMREAD_UNCHANGED);
+  if (raw.depth() != CV_8U) {
+    throw InputError(path, "expected an 8-bit image, got " + DepthText(raw.depth()) +
+                               " (is this a depth image?)");
+  }
+  cv::Mat out;
+  const int channels = raw.channels();
+  if (color == ImageColor::kGray) {
+    if (channels == 1) {
+      out = raw;
+    } else if (channels == 3) {
+      cv::cvtColor(raw, out, cv::COLOR_BGR2GRAY);
+    } else if (channels == 4) {
+      cv::cvtColor(raw, out, cv::COLOR_BGRA2GRAY);
+    }
+  } else {
+    if (channels == 1) {
+      cv::cvtColor(raw, out, cv::COLOR_GRAY2BGR);
+    } else if (channels == 3) {
+      out = raw;
+    } else if (channels == 4) {
+      cv::cvtColor(raw, out, cv::COLOR_BGRA2BGR);
+    }
+  }
+  if (out.empty()) {
+    throw InputError(path, "unsupported number of channels: " + std::to_string(channels));
+  }
+  return out;
+}
+
+cv::Mat LoadDepth(const std::string& path, cv::Size expected_size) {
+  const cv::Mat raw = ReadChecked(path, cv::IMREAD_UNCHANGED);
+  if (raw.depth() != CV_16U || raw.channels() != 1) {
+    throw InputError(path,
+                     "depth must be a 16-bit single-channel PNG (raw / depth_scale = metres), "
+                     "got " +
+                         DepthText(raw.depth()) + " with " + std::to_string(raw.channels()) +
+                         " channel(s)");
+  }
+  if (expected_size != cv::Size() && raw.size() != expected_size) {
+    throw InputError(
+        path, "depth image is " + SizeText(raw.size()) + ", expected " + SizeText(expected_size));
+  }
+  return raw;
+}
+
+RgbdImages LoadRgbd(const std::string& image_path, const std::string& depth_path,
+                    ImageColor color) {
+  RgbdImages out;
+  out.image = LoadImage(image_path, color);
+  const cv::Mat depth = LoadDepth(depth_path);
+  if (depth.size() != out.image.size()) {
+    throw InputError(depth_path, "depth image is " + SizeText(depth.size()) +
+                                     " but the colour image " + image_path + " is " +
+                                     SizeText(out.image.size()));
+  }
+  out.depth = depth;
+  return out;
+}
+
+cv::Mat DepthToMetres(const cv::Mat& raw_depth, double depth_scale) {
+  IMUMATCH_CHECK(raw_depth.type() == CV_16UC1, "raw depth must be CV_16UC1");
+  IMUMATCH_CHECK(depth_scale > 0 && std::isfinite(depth_scale), "depth_scale must be positive");
+  cv::Mat metres(raw_depth.size(), CV_32FC1);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (int r = 0; r < raw_depth.rows; ++r) {
+    const uint16_t* in = raw_depth.ptr<uint16_t>(r);
+    float* out = metres.ptr<float>(r);
+    for (int c = 0; c < raw_depth.cols; ++c) {
+      out[c] = in[c] == 0 ? nan : static_cast<float>(in[c] / depth_scale);
+    }
+  }
+  return metres;
+}
+
+void WriteImage(const std::string& path, const cv::Mat& image) {
+  IMUMATCH_CHECK(!image.empty(), "cannot write an empty image to " << path);
+  bool ok = false;
+  try {
+    ok = cv::imwrite(path, image);
+  } catch (const cv::Exception& e) {
+    throw Error("cannot write image " + path + ": " + e.what());
+  }
+  if (!ok) throw Error("cannot write image " + path);
+}
+
+}  // namespace imumatch

@@ -1,0 +1,45 @@
+#include "imumatch/io/imu_io.h"
+
+#include <fstream>
+
+#include "imumatch/core/error.h"
+#include "imumatch/core/time.h"
+#include "imumatch/io/text_parsing.h"
+
+namespace imumatch {
+
+ImuBuffer ReadImuText(const std::string& path, const ImuBufferOptions& options) {
+  static const char* kNames[] = {"gx", "gy", "gz", "ax", "ay", "az"};
+  ImuBuffer buffer(options);
+  for (const TextLine& line : ReadTextFields(path, FieldSeparator::kWhitespace)) {
+    CheckFieldCount(line, 7, path, "t_s gx gy gz ax ay az");
+    ImuSample s;
+    s.t_ns = ParseSecondsField(line.fields[0], path, line.line);
+    double v[6];
+    for (int i = 0; i < 6; ++i)
+      v[i] = ParseFiniteDouble(line.fields[i + 1], path, line.line, kNames[i]);
+    s.gyro_rad_s = Eigen::Vector3d(v[0], v[1], v[2]);
+    s.accel_m_s2 = Eigen::Vector3d(v[3], v[4], v[5]);
+    buffer.Push(s, path, line.line);
+  }
+  if (buffer.empty()) throw InputError(path, "no IMU samples found");
+  return buffer;
+}
+
+void WriteImuText(const std::string& path, const std::vector<ImuSample>& samples,
+                  const std::string& header_comment) {
+  std::ofstream out(path);
+  if (!out) throw Error("cannot write IMU file " + path);
+  if (!header_comment.empty()) out << "# " << header_comment << "\n";
+  out << "# t_s gx gy gz [rad/s] ax ay az [m/s^2]\n";
+  for (const ImuSample& s : samples) {
+    out << FormatNsAsSeconds(s.t_ns);
+    for (int i = 0; i < 3; ++i) out << ' ' << FormatDoubleExact(s.gyro_rad_s[i]);
+    for (int i = 0; i < 3; ++i) out << ' ' << FormatDoubleExact(s.accel_m_s2[i]);
+    out << '\n';
+  }
+  out.flush();
+  if (!out) throw Error("error while writing IMU file " + path);
+}
+
+}  // namespace imumatch
