@@ -1,0 +1,127 @@
+#include "imumatch/matching/baseline_matchers.h"
+
+#include <random>
+
+#include <gtest/gtest.h>
+#include <opencv2/features2d.hpp>
+
+#include "imumatch/core/error.h"
+
+namespace imumatch {
+namespace {
+
+cv::Mat RandomBinary(int rows, int bytes, std::mt19937& rng) {
+  cv::Mat m(rows, bytes, CV_8U);
+  cv::randu(m, 0, 256);
+  (void)rng;
+  return m;
+}
+
+// B = A's rows with a few flipped bits, shuffled, plus random rows.
+void MakeBinaryPair(int n, int extra, int bytes, uint64_t seed, cv::Mat& a, cv::Mat& b) {
+  cv::RNG cv_rng(seed);
+  cv::theRNG() = cv_rng;
+  std::mt19937 rng(static_cast<uint32_t>(seed));
+  a = RandomBinary(n, bytes, rng);
+  b = RandomBinary(n + extra, bytes, rng);
+  std::uniform_int_distribution<int> bit(0, bytes * 8 - 1);
+  for (int i = 0; i < n; ++i) {
+    a.row(i).copyTo(b.row(n + extra - 1 - i));
+    for (int f = 0; f < 10; ++f) {
+      const int k = bit(rng);
+      b.at<uint8_t>(n + extra - 1 - i, k / 8) ^= static_cast<uint8_t>(1u << (k % 8));
+    }
+  }
+}
+
+void ExpectSameNearest(const std::vector<Match>& ours, const std::vector<cv::DMatch>& cv_matches,
+                       const cv::Mat& a, const cv::Mat& b, int norm) {
+  ASSERT_EQ(ours.size(), cv_matches.size());
+  int same_index = 0;
+  for (size_t i = 0; i < ours.size(); ++i) {
+    EXPECT_EQ(ours[i].query_idx, cv_matches[i].queryIdx);
+    EXPECT_NEAR(ours[i].distance, cv_matches[i].distance, 1e-3 * (1.0f + ours[i].distance));
+    // Indices may differ only on exact ties: then both are at the same distance.
+    if (ours[i].train_idx == cv_matches[i].trainIdx) {
+      ++same_index;
+    } else {
+      EXPECT_NEAR(cv::norm(a.row(ours[i].query_idx), b.row(ours[i].train_idx), norm),
+                  cv::norm(a.row(ours[i].query_idx), b.row(cv_matches[i].trainIdx), norm), 1e-2);
+    }
+  }
+  EXPECT_GT(same_index, static_cast<int>(ours.size()) * 9 / 10);
+}
+
+TEST(BaselineMatchersTest, OwnBruteForceEqualsOpenCvForBinary) {
+  for (int bytes : {32, 64, 16}) {
+    cv::Mat a, b;
+    MakeBinaryPair(203, 150, bytes, 17 + bytes, a, b);  // 203: not a multiple of the query block
+    cv::BFMatcher bf(cv::NORM_HAMMING);
+    std::vector<cv::DMatch> expected;
+    bf.match(a, b, expected);
+    ExpectSameNearest(MatchBruteForce(a, b, BruteForceOptions()), expected, a, b, cv::NORM_HAMMING);
+    // Second neighbour = OpenCV's knn k=2.
+    std::vector<std::vector<cv::DMatch>> knn;
+    bf.knnMatch(a, b, knn, 2);
+    const std::vector<Match> ours = MatchBruteForce(a, b, BruteForceOptions());
+    for (size_t i = 0; i < ours.size(); ++i) EXPECT_EQ(ours[i].second_distance, knn[i][1].distance);
+  }
+}
+
+TEST(BaselineMatchersTest, OwnBruteForceEqualsOpenCvForFloat) {
+  cv::theRNG() = cv::RNG(5);
+  for (int dims : {128, 64, 36}) {
+    cv::Mat a(157, dims, CV_32F), b(301, dims, CV_32F);
+    cv::randu(a, 0.0f, 100.0f);
+    cv::randu(b, 0.0f, 100.0f);
+    cv::BFMatcher bf(cv::NORM_L2);
+    std::vector<cv::DMatch> expected;
+    bf.match(a, b, expected);
+    ExpectSameNearest(MatchBruteForce(a, b, BruteForceOptions()), expected, a, b, cv::NORM_L2);
+  }
+}
+
+TEST(BaselineMatchersTest, RatioCrossCheckAndOpenCvWrappersAgree) {
+  cv::Mat a, b;
+  MakeBinaryPair(300, 300, 32, 99, a, b);
+  BruteForceOptions ratio;
+  ratio.ratio = 0.8;
+  const std::vector<Match> ours = MatchBruteForce(a, b, ratio);
+  const std::vector<Match> knn = MatchOpenCvKnnRatio(a, b, 0.8);
+  ASSERT_EQ(ours.size(), knn.size());
+  for (size_t k = 0; k < ours.size(); ++k) {
+    EXPECT_EQ(ours[k].query_idx, knn[k].query_idx);
+    EXPECT_EQ(ours[k].distance, knn[k].distance);
+  }
+  // Every planted pair (10 flipped bits vs ~128 for random rows) passes the ratio test.
+  EXPECT_EQ(static_cast<int>(ours.size()), 300);
+  for (const Match& m : ours) EXPECT_EQ(m.train_idx, 600 - 1 - m.query_idx);
+  BruteForceOptions cross;
+  cross.cross_check = true;
+  const std::vector<Match> ours_cc = MatchBruteForce(a, b, cross);
+  const std::vector<Match> cv_cc = MatchOpenCvCrossCheck(a, b);
+  ASSERT_EQ(ours_cc.size(), cv_cc.size());
+  for (size_t k = 0; k < ours_cc.size(); ++k) {
+    EXPECT_EQ(ours_cc[k].query_idx, cv_cc[k].query_idx);
+    EXPECT_EQ(ours_cc[k].train_idx, cv_cc[k].train_idx);
+  }
+  BruteForceOptions tight;
+  tight.max_distance = 5.0;  // below the 10 flipped bits
+  EXPECT_TRUE(MatchBruteForce(a, b, tight).empty());
+  EXPECT_EQ(MatchOpenCvBruteForce(a, b).size(), 300u);
+  // FLANN LSH is approximate: it still finds most planted pairs, and only correct ones.
+  const std::vector<Match> lsh = MatchFlannLsh(a, b, FlannLshOptions());
+  int correct = 0;
+  for (const Match& m : lsh) correct += m.train_idx == 600 - 1 - m.query_idx;
+  EXPECT_GE(correct, 200);
+  EXPECT_GE(correct, static_cast<int>(lsh.size()) - 3);
+  EXPECT_THROW(
+      MatchFlannLsh(cv::Mat::zeros(3, 8, CV_32F), cv::Mat::zeros(3, 8, CV_32F), FlannLshOptions()),
+      InvalidArgument);
+  EXPECT_THROW(MatchBruteForce(a, cv::Mat::zeros(3, 64, CV_8U), BruteForceOptions()),
+               InvalidArgument);
+  EXPECT_TRUE(MatchBruteForce(a, cv::Mat(), BruteForceOptions()).empty());
+}
+
+}  // namespace
+}  // namespace imumatch

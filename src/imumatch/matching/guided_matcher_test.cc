@@ -1,0 +1,313 @@
+#include "imumatch/matching/guided_matcher.h"
+
+#include <cmath>
+#include <map>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "imumatch/core/error.h"
+#include "imumatch/core/so3.h"
+
+namespace imumatch {
+namespace {
+
+// A synthetic pair: random 3D points in front of camera A, projected into A and B with a known
+// motion; binary descriptors random in A and copied to B with a few flipped bits; extra distractor
+// keypoints with random descriptors in B.
+struct SyntheticPair {
+  PinholeCamera camera;
+  CameraMotion motion;  // the motion given to the matcher
+  std::vector<KeypointInfo> kps_a, kps_b;
+  std::vector<float> depth_a;
+  cv::Mat desc_a, desc_b;
+  std::vector<int> partner;  // partner[i] = index in B of A's keypoint i
+};
+
+cv::Mat RandomDescriptor(std::mt19937& rng) {
+  cv::Mat d(1, 32, CV_8U);
+  std::uniform_int_distribution<int> byte(0, 255);
+  for (int k = 0; k < 32; ++k) d.at<uint8_t>(0, k) = static_cast<uint8_t>(byte(rng));
+  return d;
+}
+
+// true_motion moves the points; the returned pair carries `given` (nominal) as its motion.
+SyntheticPair MakePair(int n_points, int n_distractors, const Rigid3d& true_motion,
+                       const CameraMotion& given, uint32_t seed, int flipped_bits = 3) {
+  SyntheticPair s;
+  s.camera = PinholeCamera::KinectDefault();
+  s.motion = given;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uu(0, 639), uv(0, 479), uz(0.8, 4.0);
+  std::vector<cv::Mat> rows_a, rows_b;
+  while (static_cast<int>(s.kps_a.size()) < n_points) {
+    const Eigen::Vector2d pa(uu(rng), uv(rng));
+    const double z = uz(rng);
+    const Eigen::Vector3d p_b = true_motion * s.camera.Unproject(pa, z);
+    const auto pb = s.camera.Project(p_b);
+    if (!pb || !s.camera.IsInside(*pb, 1.0)) continue;
+    s.kps_a.push_back(
+        KeypointInfo{static_cast<float>(pa.x()), static_cast<float>(pa.y()), -1, 0, 0});
+    s.kps_b.push_back(
+        KeypointInfo{static_cast<float>(pb->x()), static_cast<float>(pb->y()), -1, 0, 0});
+    s.depth_a.push_back(static_cast<float>(z));
+    cv::Mat da = RandomDescriptor(rng), db = da.clone();
+    // Exactly flipped_bits distinct bits.
+    std::vector<int> bits(256);
+    for (int b = 0; b < 256; ++b) bits[b] = b;
+    std::shuffle(bits.begin(), bits.end(), rng);
+    for (int f = 0; f < flipped_bits; ++f) {
+      db.at<uint8_t>(0, bits[f] / 8) ^= static_cast<uint8_t>(1u << (bits[f] % 8));
+    }
+    rows_a.push_back(da);
+    rows_b.push_back(db);
+  }
+  for (int k = 0; k < n_distractors; ++k) {
+    s.kps_b.push_back(
+        KeypointInfo{static_cast<float>(uu(rng)), static_cast<float>(uv(rng)), -1, 0, 0});
+    rows_b.push_back(RandomDescriptor(rng));
+  }
+  // Shuffle B so partner indices are not the identity.
+  std::vector<int> perm(s.kps_b.size());
+  for (size_t k = 0; k < perm.size(); ++k) perm[k] = static_cast<int>(k);
+  std::shuffle(perm.begin(), perm.end(), rng);
+  std::vector<KeypointInfo> kb(perm.size());
+  std::vector<cv::Mat> rb(perm.size());
+  std::vector<int> new_pos(perm.size());
+  for (size_t k = 0; k < perm.size(); ++k) {
+    kb[k] = s.kps_b[perm[k]];
+    rb[k] = rows_b[perm[k]];
+    new_pos[perm[k]] = static_cast<int>(k);
+  }
+  s.kps_b = kb;
+  for (int i = 0; i < n_points; ++i) s.partner.push_back(new_pos[i]);
+  cv::vconcat(rows_a, s.desc_a);
+  cv::vconcat(rb, s.desc_b);
+  return s;
+}
+
+CameraMotion Motion(const Rigid3d& r) {
+  CameraMotion m;
+  m.cam_b_from_cam_a = r;
+  return m;
+}
+
+struct Outcome {
+  MatchResult result;
+  std::vector<KeypointPrediction> predictions;
+  int correct = 0;
+  int wrong = 0;
+};
+
+Outcome RunMatch(const SyntheticPair& s, const PredictionOptions& po,
+                 const GuidedMatcherOptions& mo, bool use_depth = true) {
+  Outcome o;
+  o.predictions = PredictKeypoints(s.camera, s.motion, s.kps_a,
+                                   use_depth ? s.depth_a : std::vector<float>(), po);
+  GridIndex grid;
+  grid.Build(s.kps_b, s.camera.width, s.camera.height, static_cast<float>(mo.grid_cell_size));
+  o.result = MatchGuided(o.predictions, s.kps_a, DescriptorView::FromMat(s.desc_a), s.kps_b, grid,
+                         DescriptorView::FromMat(s.desc_b), mo);
+  for (const Match& m : o.result.matches) {
+    (m.train_idx == s.partner[m.query_idx] ? o.correct : o.wrong)++;
+  }
+  EXPECT_EQ(o.result.stats.OutcomeSum(), o.result.stats.queries);
+  return o;
+}
+
+const Rigid3d kTrueMotion(FromEulerZYX(0.03, -0.02, 0.04), Eigen::Vector3d(0.08, -0.03, 0.05));
+
+TEST(GuidedMatcherTest, FindsEveryPartnerInsideItsWindow) {
+  const SyntheticPair s = MakePair(400, 400, kTrueMotion, Motion(kTrueMotion), 1);
+  const Outcome o = RunMatch(s, PredictionOptions(), GuidedMatcherOptions());
+  int partner_in_window = 0;
+  for (size_t i = 0; i < s.kps_a.size(); ++i) {
+    const KeypointInfo& b = s.kps_b[s.partner[i]];
+    partner_in_window += o.predictions[i].Contains(b.x, b.y);
+  }
+  EXPECT_EQ(partner_in_window, 400);
+  EXPECT_EQ(o.correct, 400) << o.result.stats.ToString();
+  EXPECT_EQ(o.wrong, 0);
+  EXPECT_EQ(o.result.stats.predicted_with_depth, 400);
+  // Far fewer distance computations than brute force (400 x 800).
+  EXPECT_LT(o.result.stats.distances_computed, 400 * 800 / 50);
+  for (const Match& m : o.result.matches) {
+    EXPECT_LE(m.distance, 3.0f);  // 3 flipped bits
+    EXPECT_TRUE(m.predicted_uv.allFinite());
+  }
+  const std::vector<cv::DMatch> dm = o.result.ToDMatches();
+  ASSERT_EQ(dm.size(), o.result.matches.size());
+  EXPECT_EQ(dm[0].trainIdx, o.result.matches[0].train_idx);
+}
+
+TEST(GuidedMatcherTest, GateExcludesPartnerJustOutsideTheWindow) {
+  SyntheticPair s = MakePair(50, 0, kTrueMotion, Motion(kTrueMotion), 2);
+  const PredictionOptions po;
+  const std::vector<KeypointPrediction> pred =
+      PredictKeypoints(s.camera, s.motion, s.kps_a, s.depth_a, po);
+  // Keypoint 0's partner: move it 0.5 px outside the right edge of the window, keypoint 1's partner
+  // 0.5 px inside the bottom edge.
+  ASSERT_TRUE(pred[0].HasWindow() && pred[1].HasWindow());
+  s.kps_b[s.partner[0]].x = pred[0].max_x + 0.5f;
+  s.kps_b[s.partner[0]].y = pred[0].uv.y();
+  s.kps_b[s.partner[1]].x = pred[1].uv.x();
+  s.kps_b[s.partner[1]].y = pred[1].max_y - 0.5f;
+  const Outcome o = RunMatch(s, po, GuidedMatcherOptions());
+  std::map<int, int> by_query;
+  for (const Match& m : o.result.matches) by_query[m.query_idx] = m.train_idx;
+  EXPECT_EQ(by_query.count(0), 0u);
+  ASSERT_EQ(by_query.count(1), 1u);
+  EXPECT_EQ(by_query[1], s.partner[1]);
+  EXPECT_EQ(o.result.stats.no_candidate_in_window, 1);
+  EXPECT_EQ(o.correct, 49);
+}
+
+TEST(GuidedMatcherTest, UncertainPoseStillMatchesWithinTheGate) {
+  // The matcher gets a nominal motion; the truth differs by a draw from the stated covariance.
+  Eigen::Matrix<double, 6, 1> sig;
+  sig << 0.01, 0.01, 0.005, 0.02, 0.02, 0.02;  // rad, m: ~5 px of rotation error at f=525
+  // A perturbation of 0.8 sigma in every component (squared Mahalanobis norm 6 * 0.64 = 3.84):
+  // its first-order image displacement has a 2-D squared Mahalanobis norm <= 3.84 < 9.21, so
+  // every partner must lie inside its 99% gate. Truth: R_true = Exp(d) R, t_true = t + d_t.
+  Eigen::Matrix<double, 6, 1> d;
+  d << 0.8, -0.8, 0.8, -0.8, 0.8, -0.8;
+  d = d.cwiseProduct(sig);
+  const Rigid3d nominal = kTrueMotion;
+  const Rigid3d truth(ExpSO3(d.head<3>()) * nominal.rotation, nominal.translation + d.tail<3>());
+  CameraMotion given = Motion(nominal);
+  given.covariance = sig.cwiseAbs2().asDiagonal();
+  const SyntheticPair s = MakePair(400, 400, truth, given, 3);
+  const Outcome o = RunMatch(s, PredictionOptions(), GuidedMatcherOptions());
+  int in_window = 0;
+  for (size_t i = 0; i < s.kps_a.size(); ++i) {
+    in_window += o.predictions[i].Contains(s.kps_b[s.partner[i]].x, s.kps_b[s.partner[i]].y);
+  }
+  EXPECT_GE(in_window, 398);  // first-order bound; the projection's curvature may cost one or two
+  EXPECT_GE(o.correct, 398) << o.result.stats.ToString();
+  EXPECT_LE(o.wrong, 2);
+  // The same nominal pose without its covariance gives windows too small for the error.
+  SyntheticPair overconfident = s;
+  overconfident.motion.covariance.setZero();
+  const Outcome small = RunMatch(overconfident, PredictionOptions(), GuidedMatcherOptions());
+  EXPECT_LT(small.correct, o.correct - 50) << small.result.stats.ToString();
+}
+
+TEST(GuidedMatcherTest, NoDepthKeypointsMatchAlongTheEpipolarSegment) {
+  const SyntheticPair s = MakePair(200, 200, kTrueMotion, Motion(kTrueMotion), 4);
+  GuidedMatcherOptions mo;
+  const Outcome o = RunMatch(s, PredictionOptions(), mo, /*use_depth=*/false);
+  EXPECT_EQ(o.result.stats.predicted_without_depth, 200);
+  int contains = 0;
+  for (size_t i = 0; i < s.kps_a.size(); ++i) {
+    const KeypointInfo& b = s.kps_b[s.partner[i]];
+    contains += o.predictions[i].Contains(b.x, b.y);
+  }
+  EXPECT_EQ(contains, 200);  // true depths 0.8..4 m lie in [0.3, inf)
+  // Longer search regions admit distractors, but descriptors with 3 flipped bits stay unique.
+  EXPECT_GE(o.correct, 198) << o.result.stats.ToString();
+  EXPECT_EQ(o.wrong, 0);
+}
+
+TEST(GuidedMatcherTest, OrientationScaleAndMutualRejectionsAreCounted) {
+  SyntheticPair s = MakePair(20, 0, kTrueMotion, Motion(kTrueMotion), 5);
+  PredictionOptions po;
+  std::vector<KeypointPrediction> pred =
+      PredictKeypoints(s.camera, s.motion, s.kps_a, s.depth_a, po);
+  // Angles and sizes consistent with the prediction for everyone...
+  for (size_t i = 0; i < s.kps_a.size(); ++i) {
+    s.kps_a[i].angle_deg = 100.0f;
+    s.kps_a[i].size = 20.0f;
+    s.kps_b[s.partner[i]].angle_deg = std::fmod(100.0f + pred[i].angle_change_deg + 360.0f, 360.0f);
+    s.kps_b[s.partner[i]].size = 20.0f * pred[i].scale_min;
+  }
+  // ...except keypoint 0 (B angle off by 90 degrees) and keypoint 1 (B 5x larger).
+  s.kps_b[s.partner[0]].angle_deg = std::fmod(s.kps_b[s.partner[0]].angle_deg + 90.0f, 360.0f);
+  s.kps_b[s.partner[1]].size *= 5.0f;
+  Outcome o = RunMatch(s, po, GuidedMatcherOptions());
+  EXPECT_EQ(o.result.stats.orientation, 1);
+  EXPECT_EQ(o.result.stats.scale, 1);
+  EXPECT_EQ(o.correct, 18);
+  GuidedMatcherOptions lax;
+  lax.check_orientation = false;
+  lax.check_scale = false;
+  EXPECT_EQ(RunMatch(s, po, lax).correct, 20);
+
+  // Mutual: keypoint 3's partner is removed from B's content by giving it a copy of keypoint 2's
+  // position; A's keypoint 3 gets a descriptor close to (but farther than A2 from) B's partner
+  // of 2.
+  SyntheticPair m = MakePair(20, 0, kTrueMotion, Motion(kTrueMotion), 6);
+  const int b2 = m.partner[2];
+  m.kps_a[3] = m.kps_a[2];
+  m.depth_a[3] = m.depth_a[2];
+  m.desc_b.row(b2).copyTo(m.desc_a.row(3));
+  m.desc_a.at<uint8_t>(3, 0) ^= 0xFF;  // 8 bits from B's partner of 2 (A2 is 3 bits away)
+  GuidedMatcherOptions mo;
+  mo.mutual = false;
+  Outcome without = RunMatch(m, po, mo);
+  int to_b2 = 0;
+  for (const Match& x : without.result.matches) to_b2 += x.train_idx == b2;
+  EXPECT_EQ(to_b2, 2);  // keypoints 2 and 3 both take it (3's own partner is farther away)
+  mo.mutual = true;
+  Outcome with = RunMatch(m, po, mo);
+  to_b2 = 0;
+  for (const Match& x : with.result.matches) {
+    if (x.train_idx == b2) {
+      ++to_b2;
+      EXPECT_EQ(x.query_idx, 2);
+    }
+  }
+  EXPECT_EQ(to_b2, 1);
+  EXPECT_EQ(with.result.stats.mutual, 1);
+}
+
+TEST(GuidedMatcherTest, DistanceThresholdAndRatioTest) {
+  SyntheticPair s = MakePair(30, 0, kTrueMotion, Motion(kTrueMotion), 8, /*flipped_bits=*/70);
+  GuidedMatcherOptions mo;  // 64 bits of 256 allowed: 70 flipped bits are all rejected
+  Outcome o = RunMatch(s, PredictionOptions(), mo);
+  EXPECT_EQ(o.result.stats.distance_threshold, 30);
+  EXPECT_EQ(o.result.stats.matched, 0);
+  mo.max_hamming_fraction = 0.3;
+  EXPECT_EQ(RunMatch(s, PredictionOptions(), mo).correct, 30);
+  // Ratio: a second candidate next to keypoint 0's partner, with a descriptor as close -> rejected.
+  SyntheticPair r = MakePair(30, 0, kTrueMotion, Motion(kTrueMotion), 8);
+  r.kps_b.push_back(r.kps_b[r.partner[0]]);
+  const cv::Mat twin = r.desc_b.row(r.partner[0]).clone();  // equal distance: ratio 1
+  r.desc_b.push_back(twin);
+  const Outcome ro = RunMatch(r, PredictionOptions(), GuidedMatcherOptions());
+  EXPECT_EQ(ro.result.stats.ratio_test, 1);
+  EXPECT_EQ(ro.correct, 29);
+}
+
+TEST(GuidedMatcherTest, CheckAndInputValidation) {
+  GuidedMatcherOptions o;
+  EXPECT_NO_THROW(o.Check());
+  o.ratio = 0.0;
+  EXPECT_THROW(o.Check(), InvalidArgument);
+  o = GuidedMatcherOptions();
+  o.grid_cell_size = 0.0;
+  EXPECT_THROW(o.Check(), InvalidArgument);
+  const SyntheticPair s = MakePair(10, 0, kTrueMotion, Motion(kTrueMotion), 10);
+  GridIndex grid;
+  grid.Build(s.kps_b, 640, 480, 24.0f);
+  std::vector<KeypointPrediction> too_few(3);
+  EXPECT_THROW(MatchGuided(too_few, s.kps_a, DescriptorView::FromMat(s.desc_a), s.kps_b, grid,
+                           DescriptorView::FromMat(s.desc_b), GuidedMatcherOptions()),
+               InvalidArgument);
+  // cv adapter end to end: depth image in metres.
+  std::vector<cv::KeyPoint> ka, kb;
+  for (const auto& k : s.kps_a) ka.emplace_back(k.x, k.y, 7.0f);
+  for (const auto& k : s.kps_b) kb.emplace_back(k.x, k.y, 7.0f);
+  cv::Mat depth(480, 640, CV_32F, cv::Scalar(0.0f));
+  for (size_t i = 0; i < ka.size(); ++i) {
+    depth.at<float>(static_cast<int>(std::lround(ka[i].pt.y)),
+                    static_cast<int>(std::lround(ka[i].pt.x))) = s.depth_a[i];
+  }
+  const MatchResult r = MatchFramesGuided(s.camera, s.motion, ka, s.desc_a, depth, kb, s.desc_b,
+                                          PredictionOptions(), GuidedMatcherOptions());
+  EXPECT_EQ(r.stats.predicted_with_depth, 10);
+  EXPECT_EQ(r.stats.matched, 10);
+  for (const Match& m : r.matches) EXPECT_EQ(m.train_idx, s.partner[m.query_idx]);
+}
+
+}  // namespace
+}  // namespace imumatch

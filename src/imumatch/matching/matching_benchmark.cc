@@ -1,0 +1,254 @@
+// Guided matching vs unguided baselines on the same real keypoints (TUM fr1_xyz pair, the
+// ground-truth relative pose standing in for the IMU). Single thread. Every guided iteration does
+// the whole per-frame work: keypoint conversion, depth lookup in A, prediction with covariance,
+// grid build over B, and matching. At the end a summary table prints times, speedups and time per
+// keypoint.
+#include <benchmark/benchmark.h>
+
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <string>
+
+#include <opencv2/core/utility.hpp>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "imumatch/matching/baseline_matchers.h"
+#include "imumatch/matching/guided_matcher.h"
+
+#ifndef IMUMATCH_BENCH_DATA_DIR
+#define IMUMATCH_BENCH_DATA_DIR "../shared/data"
+#endif
+
+namespace imumatch {
+namespace {
+
+std::string DataPath(const std::string& file) {
+  const char* env = std::getenv("IMUMATCH_DATA_DIR");
+  const std::string dir = (env != nullptr && *env != '\0') ? env : IMUMATCH_BENCH_DATA_DIR;
+  return dir + "/tum_fr1_xyz_pair/" + file;
+}
+
+Rigid3d ReadTumPose(const std::string& path) {
+  std::ifstream in(path);
+  double tx, ty, tz, qx, qy, qz, qw;
+  if (!(in >> tx >> ty >> tz >> qx >> qy >> qz >> qw)) {
+    std::fprintf(stderr, "cannot read pose %s\n", path.c_str());
+    std::exit(1);
+  }
+  return Rigid3d(Eigen::Quaterniond(qw, qx, qy, qz), Eigen::Vector3d(tx, ty, tz));
+}
+
+struct Frames {
+  cv::Mat gray_a, gray_b, depth_a;
+  CameraMotion motion;
+};
+
+const Frames& GetFrames() {
+  static const Frames f = [] {
+    Frames fr;
+    fr.gray_a = cv::imread(DataPath("img_prev.png"), cv::IMREAD_GRAYSCALE);
+    fr.gray_b = cv::imread(DataPath("img_curr.png"), cv::IMREAD_GRAYSCALE);
+    fr.depth_a = cv::imread(DataPath("dep_prev.png"), cv::IMREAD_UNCHANGED);
+    if (fr.gray_a.empty() || fr.gray_b.empty() || fr.depth_a.empty()) {
+      std::fprintf(stderr, "missing TUM pair under %s (set IMUMATCH_DATA_DIR)\n",
+                   DataPath("").c_str());
+      std::exit(1);
+    }
+    fr.motion = CameraMotionFromPoses(0, ReadTumPose(DataPath("pose_prev.txt")), 1,
+                                      ReadTumPose(DataPath("pose_curr.txt")));
+    return fr;
+  }();
+  return f;
+}
+
+struct FeatureSet {
+  std::vector<cv::KeyPoint> kps_a, kps_b;
+  cv::Mat desc_a, desc_b;
+};
+
+// kind 0: ORB with n features (FAST threshold lowered so 8000 are reachable), 1: SIFT.
+const FeatureSet& GetFeatures(int kind, int n) {
+  static std::map<std::pair<int, int>, FeatureSet> cache;
+  auto it = cache.find({kind, n});
+  if (it != cache.end()) return it->second;
+  cv::Ptr<cv::Feature2D> f;
+  if (kind == 0) {
+    f = cv::ORB::create(n, 1.2f, 8, 15, 0, 2, cv::ORB::HARRIS_SCORE, 31, n > 2000 ? 5 : 20);
+  } else {
+    f = cv::SIFT::create(n);
+  }
+  FeatureSet s;
+  f->detectAndCompute(GetFrames().gray_a, cv::noArray(), s.kps_a, s.desc_a);
+  f->detectAndCompute(GetFrames().gray_b, cv::noArray(), s.kps_b, s.desc_b);
+  return cache.emplace(std::make_pair(kind, n), std::move(s)).first->second;
+}
+
+PinholeCamera BenchCamera() {
+  // The generic Kinect intrinsics (no distortion): on this pair they fit the ground truth as well
+  // as the fr1 calibration (see matching_tum_test), and avoid the iterative undistortion.
+  return PinholeCamera::KinectDefault();
+}
+
+void SetCounters(benchmark::State& state, const FeatureSet& s, size_t matches) {
+  state.counters["kps_a"] = static_cast<double>(s.kps_a.size());
+  state.counters["kps_b"] = static_cast<double>(s.kps_b.size());
+  state.counters["matches"] = static_cast<double>(matches);
+}
+
+void BM_Guided(benchmark::State& state) {
+  const FeatureSet& s = GetFeatures(static_cast<int>(state.range(0)), state.range(1));
+  const PinholeCamera camera = BenchCamera();
+  GuidedMatcherWorkspace workspace;
+  size_t matches = 0;
+  for (auto _ : state) {
+    MatchResult r =
+        workspace.Match(camera, GetFrames().motion, s.kps_a, s.desc_a, GetFrames().depth_a, s.kps_b,
+                        s.desc_b, PredictionOptions(), GuidedMatcherOptions());
+    matches = r.matches.size();
+    benchmark::DoNotOptimize(r.matches.data());
+  }
+  SetCounters(state, s, matches);
+}
+
+void BM_GuidedWithDistortion(benchmark::State& state) {
+  const FeatureSet& s = GetFeatures(static_cast<int>(state.range(0)), state.range(1));
+  const PinholeCamera camera = PinholeCamera::TumFreiburg1();
+  GuidedMatcherWorkspace workspace;
+  size_t matches = 0;
+  for (auto _ : state) {
+    MatchResult r =
+        workspace.Match(camera, GetFrames().motion, s.kps_a, s.desc_a, GetFrames().depth_a, s.kps_b,
+                        s.desc_b, PredictionOptions(), GuidedMatcherOptions());
+    matches = r.matches.size();
+    benchmark::DoNotOptimize(r.matches.data());
+  }
+  SetCounters(state, s, matches);
+}
+
+void BM_CvKnnRatio(benchmark::State& state) {
+  const FeatureSet& s = GetFeatures(static_cast<int>(state.range(0)), state.range(1));
+  size_t matches = 0;
+  for (auto _ : state) {
+    std::vector<Match> m = MatchOpenCvKnnRatio(s.desc_a, s.desc_b, 0.8);
+    matches = m.size();
+    benchmark::DoNotOptimize(m.data());
+  }
+  SetCounters(state, s, matches);
+}
+
+void BM_OwnBruteForceRatio(benchmark::State& state) {
+  const FeatureSet& s = GetFeatures(static_cast<int>(state.range(0)), state.range(1));
+  BruteForceOptions options;
+  options.ratio = 0.8;
+  size_t matches = 0;
+  for (auto _ : state) {
+    std::vector<Match> m = MatchBruteForce(s.desc_a, s.desc_b, options);
+    matches = m.size();
+    benchmark::DoNotOptimize(m.data());
+  }
+  SetCounters(state, s, matches);
+}
+
+void BM_FlannLsh(benchmark::State& state) {
+  const FeatureSet& s = GetFeatures(static_cast<int>(state.range(0)), state.range(1));
+  size_t matches = 0;
+  for (auto _ : state) {
+    std::vector<Match> m = MatchFlannLsh(s.desc_a, s.desc_b, FlannLshOptions());
+    matches = m.size();
+    benchmark::DoNotOptimize(m.data());
+  }
+  SetCounters(state, s, matches);
+}
+
+void OrbSizes(benchmark::internal::Benchmark* b) {
+  for (int n : {500, 1000, 2000, 4000, 8000}) b->Args({0, n});
+  b->Args({1, 1000});  // SIFT
+  b->ArgNames({"sift", "n"});
+}
+
+BENCHMARK(BM_Guided)->Apply(OrbSizes)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_CvKnnRatio)->Apply(OrbSizes)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_OwnBruteForceRatio)->Apply(OrbSizes)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_GuidedWithDistortion)
+    ->Args({0, 1000})
+    ->ArgNames({"sift", "n"})
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_FlannLsh)
+    ->Args({0, 1000})
+    ->Args({0, 4000})
+    ->ArgNames({"sift", "n"})
+    ->Unit(benchmark::kMicrosecond);
+
+// Console output as usual, plus the per-iteration real time of every run for the summary.
+class CapturingReporter : public benchmark::ConsoleReporter {
+ public:
+  void ReportRuns(const std::vector<Run>& runs) override {
+    for (const Run& r : runs) {
+      if (r.run_type != Run::RT_Iteration || r.error_occurred) continue;
+      times_us[r.benchmark_name()] = r.GetAdjustedRealTime();  // in the benchmark's unit (us)
+      if (r.counters.count("kps_a")) kps[r.benchmark_name()] = r.counters.at("kps_a").value;
+    }
+    ConsoleReporter::ReportRuns(runs);
+  }
+  std::map<std::string, double> times_us;
+  std::map<std::string, double> kps;
+};
+
+void PrintSummary(const CapturingReporter& rep) {
+  std::printf(
+      "\nSummary (single thread, real time per frame pair; guided = depth lookup +\n"
+      "prediction + grid build + matching; descriptor kernels: Hamming %s, L2 %s)\n",
+      DescriptorKernelName(DescriptorNorm::kHamming), DescriptorKernelName(DescriptorNorm::kL2));
+  std::printf("%-10s %7s %11s %13s %13s %11s %11s %12s %12s\n", "features", "kps_a", "guided[us]",
+              "cv knn+r[us]", "own BF+r[us]", "x vs knn", "x vs ownBF", "guided ns/kp",
+              "knn ns/kp");
+  const auto get = [&rep](const std::string& name) {
+    auto it = rep.times_us.find(name);
+    return it == rep.times_us.end() ? -1.0 : it->second;
+  };
+  for (int kind : {0, 1}) {
+    for (int n : {500, 1000, 2000, 4000, 8000}) {
+      if (kind == 1 && n != 1000) continue;
+      const std::string args = "/sift:" + std::to_string(kind) + "/n:" + std::to_string(n);
+      const double g = get("BM_Guided" + args), k = get("BM_CvKnnRatio" + args),
+                   b = get("BM_OwnBruteForceRatio" + args);
+      if (g <= 0 || k <= 0 || b <= 0) continue;
+      const double kp = rep.kps.count("BM_Guided" + args) ? rep.kps.at("BM_Guided" + args) : n;
+      std::printf("%-10s %7.0f %11.1f %13.1f %13.1f %10.1fx %10.1fx %12.1f %12.1f\n",
+                  kind ? "SIFT" : "ORB", kp, g, k, b, k / g, b / g, 1000.0 * g / kp,
+                  1000.0 * k / kp);
+    }
+  }
+  const double gd = get("BM_GuidedWithDistortion/sift:0/n:1000");
+  const double g1 = get("BM_Guided/sift:0/n:1000");
+  if (gd > 0 && g1 > 0) {
+    std::printf(
+        "ORB 1000 guided with TUM fr1 distortion (iterative undistortion): %.1f us (%.1fx "
+        "the undistorted camera)\n",
+        gd, gd / g1);
+  }
+  for (int n : {1000, 4000}) {
+    const double l = get("BM_FlannLsh/sift:0/n:" + std::to_string(n));
+    const double g = get("BM_Guided/sift:0/n:" + std::to_string(n));
+    if (l > 0 && g > 0) {
+      std::printf("ORB %d FLANN LSH (index build + knn + ratio): %.1f us, guided %.1fx faster\n", n,
+                  l, l / g);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace imumatch
+
+int main(int argc, char** argv) {
+  cv::setNumThreads(1);  // single-thread comparison (OpenCV would otherwise use both cores)
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  imumatch::CapturingReporter reporter;
+  benchmark::RunSpecifiedBenchmarks(&reporter);
+  imumatch::PrintSummary(reporter);
+  benchmark::Shutdown();
+  return 0;
+}

@@ -1,0 +1,272 @@
+#include "imumatch/matching/predictor.h"
+
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "imumatch/core/error.h"
+#include "imumatch/core/so3.h"
+
+namespace imumatch {
+namespace {
+
+PinholeCamera TestCamera() {
+  PinholeCamera c;
+  c.width = 640;
+  c.height = 480;
+  c.fx = 500.0;
+  c.fy = 480.0;
+  c.cx = 320.0;
+  c.cy = 240.0;
+  return c;
+}
+
+CameraMotion MakeMotion(const Eigen::Quaterniond& q, const Eigen::Vector3d& t) {
+  CameraMotion m;
+  m.cam_b_from_cam_a = Rigid3d(q, t);
+  return m;
+}
+
+TEST(PredictorTest, WithDepthEqualsDirectReprojection) {
+  const PinholeCamera cam = TestCamera();
+  const CameraMotion motion = MakeMotion(FromEulerZYX(0.02, -0.03, 0.05), {0.1, -0.05, 0.08});
+  const KeypointPredictor predictor(cam, motion, PredictionOptions());
+  // Hand computation for one point: pixel (400, 300) at depth 2 m.
+  const Eigen::Vector3d p_a((400.0 - 320.0) / 500.0 * 2.0, (300.0 - 240.0) / 480.0 * 2.0, 2.0);
+  const Eigen::Vector3d p_b = motion.cam_b_from_cam_a * p_a;
+  const Eigen::Vector2d expected(500.0 * p_b.x() / p_b.z() + 320.0,
+                                 480.0 * p_b.y() / p_b.z() + 240.0);
+  const KeypointPrediction p = predictor.Predict({400.0, 300.0}, 2.0);
+  ASSERT_EQ(p.status, PredictionStatus::kWithDepth);
+  EXPECT_NEAR(p.uv.x(), expected.x(), 1e-3);
+  EXPECT_NEAR(p.uv.y(), expected.y(), 1e-3);
+  EXPECT_TRUE(p.Contains(p.uv.x(), p.uv.y()));
+  // Zero motion covariance: the covariance is the keypoint noise of A (1 px, mapped through a
+  // Jacobian close to the identity for this small motion) plus B's (1 px) plus the tiny depth
+  // noise: about 2 px^2 per axis; the half sizes are sqrt(9.21 * variance) (>= the 4 px minimum).
+  EXPECT_GT(p.covariance(0, 0), 1.8f);
+  EXPECT_LT(p.covariance(0, 0), 2.4f);
+  EXPECT_NEAR(p.max_x - p.uv.x(), std::max(4.0, std::sqrt(9.2103 * p.covariance(0, 0))), 1e-3);
+  EXPECT_NEAR(p.uv.y() - p.min_y, std::max(4.0, std::sqrt(9.2103 * p.covariance(1, 1))), 1e-3);
+  EXPECT_NEAR(p.scale_min, p_a.norm() / p_b.norm(), 1e-5);
+}
+
+TEST(PredictorTest, BehindCameraAndOutsideImageAreReported) {
+  const PinholeCamera cam = TestCamera();
+  // B is 3 m in front of A looking the same way: a point at 2 m ends up behind B.
+  const KeypointPredictor forward(cam, MakeMotion(Eigen::Quaterniond::Identity(), {0, 0, -3.0}),
+                                  PredictionOptions());
+  EXPECT_EQ(forward.Predict({320, 240}, 2.0).status, PredictionStatus::kBehindCamera);
+  // Sideways motion of 1 m at 2 m depth moves the point 250 px: out of the image.
+  const KeypointPredictor side(cam, MakeMotion(Eigen::Quaterniond::Identity(), {-1.0, 0, 0}),
+                               PredictionOptions());
+  const KeypointPrediction p = side.Predict({200, 240}, 2.0);
+  EXPECT_EQ(p.status, PredictionStatus::kOutsideImage);
+  EXPECT_NEAR(p.uv.x(), 200.0 - 250.0, 1e-3);
+  EXPECT_FALSE(p.HasWindow());
+  EXPECT_EQ(side.Predict({std::nan(""), 240}, 2.0).status, PredictionStatus::kInvalid);
+  PredictionOptions no_segment;
+  no_segment.predict_without_depth = false;
+  EXPECT_EQ(
+      KeypointPredictor(cam, MakeMotion(Eigen::Quaterniond::Identity(), {0, 0, 0}), no_segment)
+          .Predict({100, 100}, 0.0)
+          .status,
+      PredictionStatus::kInvalid);
+}
+
+TEST(PredictorTest, RotationOnlyIsTheInfiniteHomography) {
+  const PinholeCamera cam = TestCamera();
+  const double a = 5.0 * M_PI / 180.0;
+  // Rotation about the camera's y axis by 5 degrees (R = Ry(a)), no translation.
+  const Eigen::Quaterniond q(Eigen::AngleAxisd(a, Eigen::Vector3d::UnitY()));
+  const KeypointPredictor predictor(cam, MakeMotion(q, Eigen::Vector3d::Zero()),
+                                    PredictionOptions());
+  // Hand check: the principal point's ray (0,0,1) becomes (sin a, 0, cos a): u = cx + fx tan a.
+  const Eigen::Vector2d centre = predictor.RotationOnly({320.0, 240.0});
+  EXPECT_NEAR(centre.x(), 320.0 + 500.0 * std::tan(a), 1e-9);  // 363.744...
+  EXPECT_NEAR(centre.y(), 240.0, 1e-9);
+  // A general point against H = K R K^-1 applied in homogeneous coordinates.
+  const Eigen::Matrix3d h = predictor.InfiniteHomography();
+  const Eigen::Vector3d x = h * Eigen::Vector3d(100.0, 50.0, 1.0);
+  const Eigen::Vector2d rot = predictor.RotationOnly({100.0, 50.0});
+  EXPECT_NEAR(rot.x(), x.x() / x.z(), 1e-9);
+  EXPECT_NEAR(rot.y(), x.y() / x.z(), 1e-9);
+  // Pure rotation: the prediction is independent of the depth, with or without one.
+  const KeypointPrediction with_depth = predictor.Predict({100.0, 50.0}, 1.7);
+  EXPECT_NEAR(with_depth.uv.x(), rot.x(), 1e-3);
+  const KeypointPrediction no_depth = predictor.Predict({100.0, 50.0}, 0.0);
+  ASSERT_EQ(no_depth.status, PredictionStatus::kWithoutDepth);
+  EXPECT_NEAR(no_depth.uv.x(), rot.x(), 1e-3);
+  EXPECT_NEAR((no_depth.segment_end - no_depth.segment_start).norm(), 0.0, 1e-3);
+  // In-plane rotation: roll about the optical axis by 10 degrees rotates the image by 10 degrees
+  // (x toward y, the sense of cv::KeyPoint::angle in image coordinates).
+  const Eigen::Quaterniond roll(Eigen::AngleAxisd(10.0 * M_PI / 180.0, Eigen::Vector3d::UnitZ()));
+  PinholeCamera square = cam;
+  square.fy = square.fx;
+  const KeypointPredictor rolled(square, MakeMotion(roll, Eigen::Vector3d::Zero()),
+                                 PredictionOptions());
+  EXPECT_NEAR(rolled.Predict({320, 240}, 2.0).angle_change_deg, 10.0, 1e-4);
+  EXPECT_NEAR(rolled.Predict({500, 100}, 2.0).angle_change_deg, 10.0, 1e-4);
+}
+
+TEST(PredictorTest, EpipolarSegmentContainsTrueProjectionForDepthsInRange) {
+  const PinholeCamera cam = TestCamera();
+  const CameraMotion motion = MakeMotion(FromEulerZYX(0.01, 0.02, -0.01), {0.15, 0.02, 0.05});
+  PredictionOptions options;
+  options.segment_min_depth = 0.5;
+  options.segment_max_depth = std::numeric_limits<double>::infinity();
+  const KeypointPredictor predictor(cam, motion, options);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> uu(20, 620), uv(20, 460), uz(0.5, 30.0);
+  int inside = 0, tested = 0;
+  for (int k = 0; k < 200; ++k) {
+    const Eigen::Vector2d pix(uu(rng), uv(rng));
+    const double z = uz(rng);
+    const Eigen::Vector3d p_b = motion.cam_b_from_cam_a * cam.Unproject(pix, z);
+    const Eigen::Vector2d truth(500.0 * p_b.x() / p_b.z() + 320.0,
+                                480.0 * p_b.y() / p_b.z() + 240.0);
+    if (!cam.IsInside(truth)) continue;
+    const KeypointPrediction p = predictor.Predict(pix, std::nan(""));
+    ASSERT_EQ(p.status, PredictionStatus::kWithoutDepth);
+    ++tested;
+    // The true point lies on the segment (up to float rounding), hence in the capsule.
+    EXPECT_LT(std::sqrt(p.SegmentDistanceSquared(truth.x(), truth.y())), 1e-2);
+    inside += p.Contains(static_cast<float>(truth.x()), static_cast<float>(truth.y()));
+    // A point 2 radii away from the segment, perpendicular to it, is not in the capsule.
+    const Eigen::Vector2f dir = (p.segment_end - p.segment_start).normalized();
+    if (dir.allFinite()) {
+      const Eigen::Vector2f off =
+          truth.cast<float>() + 2.0f * p.radius * Eigen::Vector2f(-dir.y(), dir.x());
+      EXPECT_FALSE(p.Contains(off.x(), off.y()));
+    }
+    // The segment starts at the z_min end: the projection at 0.5 m (when not clipped).
+    const Eigen::Vector3d near_b = motion.cam_b_from_cam_a * cam.Unproject(pix, 0.5);
+    const Eigen::Vector2d near(500.0 * near_b.x() / near_b.z() + 320.0,
+                               480.0 * near_b.y() / near_b.z() + 240.0);
+    if (cam.IsInside(near)) {
+      EXPECT_LT((p.segment_start.cast<double>() - near).norm(), 1e-2);
+    }
+    // The far end is the rotation-only prediction when it is inside the image.
+    if (cam.IsInside(p.uv.cast<double>())) {
+      EXPECT_LT((p.segment_end - p.uv).norm(), 1e-2);
+    }
+  }
+  EXPECT_GT(tested, 150);
+  EXPECT_EQ(inside, tested);
+}
+
+TEST(PredictorTest, CovarianceMatchesMonteCarloAndSizesTheWindow) {
+  const PinholeCamera cam = TestCamera();
+  CameraMotion motion = MakeMotion(FromEulerZYX(0.01, 0.02, 0.03), {0.1, 0.0, 0.05});
+  Eigen::Matrix<double, 6, 1> sig;
+  sig << 0.004, 0.006, 0.002, 0.01, 0.02, 0.015;
+  motion.covariance = sig.cwiseAbs2().asDiagonal();
+  PredictionOptions options;
+  options.keypoint_sigma_px = 0.0;  // motion only, so the Monte Carlo needs no pixel noise
+  options.depth_noise_coeff = 0.0;
+  options.min_half_size = 0.0;
+  const KeypointPredictor predictor(cam, motion, options);
+  const Eigen::Vector2d pix(450.0, 120.0);
+  const double z = 1.5;
+  const KeypointPrediction p = predictor.Predict(pix, z);
+  ASSERT_EQ(p.status, PredictionStatus::kWithDepth);
+  // Monte Carlo over R_true = Exp(dtheta) R, t_true = t + dt.
+  std::mt19937 rng(42);
+  std::normal_distribution<double> n01;
+  const int samples = 20000;
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  std::vector<Eigen::Vector2d> uvs(samples);
+  const Eigen::Vector3d p_a = cam.Unproject(pix, z);
+  for (int s = 0; s < samples; ++s) {
+    Eigen::Matrix<double, 6, 1> d;
+    for (int k = 0; k < 6; ++k) d[k] = sig[k] * n01(rng);
+    const Eigen::Vector3d p_b = ExpSO3(d.head<3>()) * (motion.cam_b_from_cam_a.rotation * p_a) +
+                                motion.cam_b_from_cam_a.translation + d.tail<3>();
+    uvs[s] = *cam.Project(p_b);
+    mean += uvs[s] / samples;
+  }
+  for (const auto& u : uvs) cov += (u - mean) * (u - mean).transpose() / (samples - 1);
+  const Eigen::Matrix2d predicted = p.covariance.cast<double>();
+  EXPECT_NEAR(predicted(0, 0), cov(0, 0), 0.05 * cov(0, 0));
+  EXPECT_NEAR(predicted(1, 1), cov(1, 1), 0.05 * cov(1, 1));
+  EXPECT_NEAR(predicted(0, 1), cov(0, 1), 0.05 * std::sqrt(cov(0, 0) * cov(1, 1)));
+  // Window half sizes: sqrt(9.21 * variance).
+  EXPECT_NEAR(p.max_x - p.uv.x(), std::sqrt(9.2103 * predicted(0, 0)), 1e-2);
+  EXPECT_NEAR(p.max_y - p.uv.y(), std::sqrt(9.2103 * predicted(1, 1)), 1e-2);
+  // Fixed mode ignores the covariance.
+  options.window_mode = WindowMode::kFixed;
+  const KeypointPrediction f = KeypointPredictor(cam, motion, options).Predict(pix, z);
+  EXPECT_NEAR(f.max_x - f.uv.x(), 10.0f, 1e-4);
+  EXPECT_NEAR(f.uv.y() - f.min_y, 10.0f, 1e-4);
+}
+
+TEST(PredictorTest, DepthNoiseFollowsKinectModel) {
+  // Camera moving sideways by t: the pixel shift is fx * t / z, so sigma_u = fx t sigma_z / z^2 =
+  // fx t c (independent of z for sigma_z = c z^2).
+  const PinholeCamera cam = TestCamera();
+  PredictionOptions options;
+  options.keypoint_sigma_px = 0.0;
+  options.min_half_size = 0.0;
+  options.depth_noise_coeff = 0.01;
+  const KeypointPredictor predictor(cam, MakeMotion(Eigen::Quaterniond::Identity(), {0.2, 0, 0}),
+                                    options);
+  for (double z : {1.0, 3.0}) {
+    const KeypointPrediction p = predictor.Predict({320, 240}, z);
+    EXPECT_NEAR(std::sqrt(p.covariance(0, 0)), 500.0 * 0.2 * 0.01, 1e-4);
+    EXPECT_NEAR(p.covariance(1, 1), 0.0, 1e-9);
+  }
+}
+
+TEST(PredictorTest, OptionsCheck) {
+  PredictionOptions o;
+  EXPECT_NO_THROW(o.Check());
+  EXPECT_NEAR(o.GateChiSquare(), 9.2103, 1e-4);
+  o.gate_probability = 1.0;
+  EXPECT_THROW(o.Check(), InvalidArgument);
+  o = PredictionOptions();
+  o.max_half_size = 2.0;
+  EXPECT_THROW(o.Check(), InvalidArgument);
+  o = PredictionOptions();
+  o.segment_max_depth = 0.1;
+  EXPECT_THROW(o.Check(), InvalidArgument);
+  o = PredictionOptions();
+  o.min_depth = -1;
+  EXPECT_THROW(o.Check(), InvalidArgument);
+}
+
+TEST(PredictorTest, SampleDepthModes) {
+  cv::Mat raw = cv::Mat::zeros(5, 5, CV_16U);
+  // 3x3 around (2,2): centre 0 (hole), neighbours 5000 (1 m) .. with one at 2500 (0.5 m) on the
+  // right and 15000 (3 m) below.
+  for (int r = 1; r <= 3; ++r) {
+    for (int c = 1; c <= 3; ++c) raw.at<uint16_t>(r, c) = 5000;
+  }
+  raw.at<uint16_t>(2, 2) = 0;
+  raw.at<uint16_t>(2, 3) = 2500;
+  raw.at<uint16_t>(3, 2) = 15000;
+  // Nearest: the hole is skipped; (2.4, 2.0) is nearest to (3, 2) -> 0.5 m.
+  EXPECT_FLOAT_EQ(SampleDepth(raw, 5000.0, 2.4f, 2.0f, DepthSampling::kNearest), 0.5f);
+  EXPECT_FLOAT_EQ(SampleDepth(raw, 5000.0, 2.0f, 2.4f, DepthSampling::kNearest), 3.0f);
+  EXPECT_FLOAT_EQ(SampleDepth(raw, 5000.0, 1.0f, 1.0f, DepthSampling::kNearest), 1.0f);
+  EXPECT_FLOAT_EQ(SampleDepth(raw, 5000.0, 2.0f, 2.0f, DepthSampling::kMin3x3), 0.5f);
+  // 8 valid readings: 0.5, 1 x6, 3 -> lower median 1.
+  EXPECT_FLOAT_EQ(SampleDepth(raw, 5000.0, 2.0f, 2.0f, DepthSampling::kMedian3x3), 1.0f);
+  EXPECT_TRUE(std::isnan(SampleDepth(raw, 5000.0, 20.0f, 2.0f, DepthSampling::kNearest)));
+  cv::Mat holes = cv::Mat::zeros(5, 5, CV_16U);
+  EXPECT_TRUE(std::isnan(SampleDepth(holes, 5000.0, 2.0f, 2.0f, DepthSampling::kMedian3x3)));
+  cv::Mat metres(5, 5, CV_32F, cv::Scalar(2.0f));
+  metres.at<float>(2, 2) = std::nanf("");
+  EXPECT_FLOAT_EQ(SampleDepth(metres, 5000.0, 2.0f, 2.0f, DepthSampling::kNearest), 2.0f);
+  std::vector<cv::KeyPoint> kps = {cv::KeyPoint(1.0f, 1.0f, 7.0f), cv::KeyPoint(9.0f, 9.0f, 7.0f)};
+  const std::vector<float> d = SampleDepths(raw, 5000.0, kps, DepthSampling::kNearest);
+  ASSERT_EQ(d.size(), 2u);
+  EXPECT_FLOAT_EQ(d[0], 1.0f);
+  EXPECT_TRUE(std::isnan(d[1]));
+  EXPECT_THROW(SampleDepth(cv::Mat::zeros(3, 3, CV_8U), 5000.0, 1, 1, DepthSampling::kNearest),
+               InvalidArgument);
+}
+
+}  // namespace
+}  // namespace imumatch
