@@ -38,8 +38,10 @@ struct SurfOptions {
 //   - pt: sub-pixel, sub-scale interpolated position; integer coordinates are pixel centres.
 //   - size: the (interpolated, not rounded) side L of the box filter that fired, in pixels. The
 //     scale of the keypoint, i.e. the sigma of the Gaussian that the filter approximates, is
-//     s = 1.2 * size / 9 (a 9x9 filter approximates sigma = 1.2). A Gaussian blob of standard
-//     deviation sigma_b gives its maximum at s ~= sigma_b. OpenCV rounds size to an integer.
+//     s = 1.2 * size / 9 (a 9x9 filter approximates sigma = 1.2). OpenCV rounds size to an
+//     integer; it is kept fractional here. Note that the box-filter determinant of a Gaussian blob
+//     of standard deviation sigma_b peaks at s ~= 0.72 sigma_b (not at sigma_b as the exact
+//     Gaussian determinant would): sizes are scale-covariant but not equal to the blob sigma.
 //   - angle: dominant orientation in degrees in [0, 360), measured like every OpenCV detector:
 //     atan2(dy, dx) in image coordinates (x right, y down), i.e. clockwise on screen. Rotating the
 //     image by +a degrees counter-clockwise on screen (cv::getRotationMatrix2D(c, a, 1)) changes
@@ -49,6 +51,12 @@ struct SurfOptions {
 //   - octave: octave index (0-based). class_id: sign of the Laplacian (trace), +1 or -1, which a
 //     matcher may use to skip pairs of opposite sign (dark vs bright blobs).
 // Keypoints returned by detect are sorted by decreasing response.
+//
+// Orientation: Haar responses (side 4s) at the pixel corners nearest to a grid of step s within
+// radius 6s, Gaussian weight sigma = 2s, summed over a 60-degree window sliding in 1-degree steps;
+// the angle of the longest sum wins. Descriptor: the Haar responses (side 2s) are evaluated at
+// the exact rotated sample positions by bilinear interpolation of the four neighbouring integer
+// placements (on the integral image), then expressed in the keypoint frame.
 //
 // compute() on given keypoints recomputes the orientation (unless upright) from the image and
 // overwrites kp.angle; keypoints with size <= 0, a non-finite position, no Haar response inside
