@@ -17,6 +17,17 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
+// 320 x 240 with the Kinect field of view.
+PinholeCamera HalfCamera() {
+  PinholeCamera c = PinholeCamera::KinectDefault();
+  c.width = 320;
+  c.height = 240;
+  c.fx = c.fy = 262.5;
+  c.cx = 159.5;
+  c.cy = 119.5;
+  return c;
+}
+
 const Scene& FurnishedScene() {
   static const Scene scene;
   return scene;
@@ -216,7 +227,7 @@ TEST(RendererTest, KinectDepthNoiseAndHoles) {
   scene_options.furniture = false;
   scene_options.texel_size_m = 0.02;
   const Scene scene(scene_options);
-  const PinholeCamera camera = PinholeCamera::KinectDefault();
+  const PinholeCamera camera = HalfCamera();
   // Facing the front wall (x = 3) at 2 m: every pixel has z in [2, 2.3].
   const Rigid3d pose = WorldFromCam(Eigen::Vector3d(1.0, 0.0, 1.4), 0.0, 0.0);
   const RenderedView exact = RenderView(scene, camera, pose);
@@ -225,8 +236,8 @@ TEST(RendererTest, KinectDepthNoiseAndHoles) {
   const RenderedView noisy = RenderView(scene, camera, pose, options);
   double sum = 0.0, sum_sq_normalised = 0.0;
   int n = 0;
-  for (int v = 0; v < 480; v += 2) {
-    for (int u = 0; u < 640; u += 2) {
+  for (int v = 0; v < camera.height; ++v) {
+    for (int u = 0; u < camera.width; ++u) {
       const double z = exact.depth.at<uint16_t>(v, u) / 5000.0;
       const double e = noisy.depth.at<uint16_t>(v, u) / 5000.0 - z;
       const double sigma = 1.425e-3 * z * z;
@@ -242,15 +253,15 @@ TEST(RendererTest, KinectDepthNoiseAndHoles) {
   options.depth_noise.add_holes = true;
   options.depth_noise.dropout_probability = 0.1;
   const RenderedView holes = RenderView(scene, camera, pose, options);
-  EXPECT_NEAR(cv::countNonZero(holes.depth == 0) / (640.0 * 480.0), 0.1, 0.01);
+  EXPECT_NEAR(cv::countNonZero(holes.depth == 0) / (320.0 * 240.0), 0.1, 0.01);
   options.depth_noise.dropout_probability = 0.0;
   options.depth_noise.max_range_m = 2.1;
   const Rigid3d slanted = WorldFromCam(Eigen::Vector3d(1.0, 0.2, 1.4), 12.0, -5.0);
   const RenderedView slanted_exact = RenderView(scene, camera, slanted);
   const RenderedView far = RenderView(scene, camera, slanted, options);
   int near_kept = 0, far_removed = 0;
-  for (int v = 0; v < 480; ++v) {
-    for (int u = 0; u < 640; ++u) {
+  for (int v = 0; v < camera.height; ++v) {
+    for (int u = 0; u < camera.width; ++u) {
       const int raw = slanted_exact.depth.at<uint16_t>(v, u);
       if (raw == 10500) continue;  // z within half a unit of the limit
       if (raw < 10500) {
@@ -262,24 +273,24 @@ TEST(RendererTest, KinectDepthNoiseAndHoles) {
       }
     }
   }
-  EXPECT_GT(near_kept, 10000);
-  EXPECT_GT(far_removed, 10000);
-  // Grazing angles: 5 cm from the side wall y = -2.5, looking along it. Pixel u = 400 sees the
-  // wall at |cos incidence| = 0.15 (a hole), pixel u = 600 at 0.47 (kept).
+  EXPECT_GT(near_kept, 5000);
+  EXPECT_GT(far_removed, 5000);
+  // Grazing angles: 5 cm from the side wall y = -2.5, looking along it. Pixel u = 200 sees the
+  // wall at |cos incidence| = 0.15 (a hole), pixel u = 300 at 0.47 (kept).
   options.depth_noise.max_range_m = 10.0;
   options.depth_noise.min_range_m = 0.0;
   const Rigid3d along = WorldFromCam(Eigen::Vector3d(0.0, -2.45, 1.4), 0.0, 0.0);
-  for (const int u : {400, 600}) {
+  for (const int u : {200, 300}) {
     const std::optional<RayHit> hit = scene.CastRay(
-        along.translation, along.rotation * Eigen::Vector3d((u - 319.5) / 525.0, 0.0, 1.0));
+        along.translation, along.rotation * Eigen::Vector3d((u - camera.cx) / camera.fx, 0.0, 1.0));
     ASSERT_TRUE(hit.has_value());
     EXPECT_NEAR(hit->normal_in_world.y(), 1.0, 1e-12);  // the side wall, facing into the room
   }
   const RenderedView graze = RenderView(scene, camera, along, options);
   const RenderedView clean = RenderView(scene, camera, along);
-  EXPECT_EQ(graze.depth.at<uint16_t>(240, 400), 0);
-  EXPECT_GT(clean.depth.at<uint16_t>(240, 400), 0);
-  EXPECT_EQ(graze.depth.at<uint16_t>(240, 600), clean.depth.at<uint16_t>(240, 600));
+  EXPECT_EQ(graze.depth.at<uint16_t>(120, 200), 0);
+  EXPECT_GT(clean.depth.at<uint16_t>(120, 200), 0);
+  EXPECT_EQ(graze.depth.at<uint16_t>(120, 300), clean.depth.at<uint16_t>(120, 300));
 }
 
 TEST(RendererTest, RejectsBadInput) {

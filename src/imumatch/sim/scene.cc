@@ -48,11 +48,13 @@ cv::Scalar ContrastColor(cv::RNG& rng, bool dark) {
 cv::Mat MakeTexture(int width, int height, double texel_m, uint64_t seed) {
   cv::RNG rng(seed);
   const double w_m = width * texel_m, h_m = height * texel_m;
-  cv::Mat acc(
-      height, width, CV_32FC3,
-      cv::Scalar(rng.uniform(70.0, 190.0), rng.uniform(70.0, 190.0), rng.uniform(70.0, 190.0)));
   // Multi-scale value noise: random lattices upsampled with bicubic interpolation; mostly
-  // luminance with some colour.
+  // luminance with some colour. Computed at half resolution (the finest octave spans 4 texels)
+  // and upsampled once; the shapes drawn below add the full-resolution detail.
+  const cv::Size half((width + 1) / 2, (height + 1) / 2);
+  cv::Mat acc(
+      half, CV_32FC3,
+      cv::Scalar(rng.uniform(70.0, 190.0), rng.uniform(70.0, 190.0), rng.uniform(70.0, 190.0)));
   const double wavelengths[] = {0.8, 0.3, 0.12, 0.05, 0.02};
   const double amplitudes[] = {40.0, 32.0, 26.0, 20.0, 14.0};
   for (int o = 0; o < 5; ++o) {
@@ -65,11 +67,12 @@ cv::Mat MakeTexture(int width, int height, double texel_m, uint64_t seed) {
     cv::merge(std::vector<cv::Mat>{lum, lum, lum}, lum3);
     cv::Mat lattice = 0.75 * lum3 + 0.35 * chroma;
     cv::Mat up;
-    cv::resize(lattice, up, cv::Size(width, height), 0, 0, cv::INTER_CUBIC);
+    cv::resize(lattice, up, half, 0, 0, cv::INTER_CUBIC);
     cv::scaleAdd(up, amplitudes[o], acc, acc);
   }
-  cv::Mat tex;
-  acc.convertTo(tex, CV_8UC3);
+  cv::Mat half_tex, tex;
+  acc.convertTo(half_tex, CV_8UC3);
+  cv::resize(half_tex, tex, cv::Size(width, height), 0, 0, cv::INTER_LINEAR);
 
   const double area = w_m * h_m;
   const double px = 1.0 / texel_m;  // texels per metre
