@@ -223,7 +223,8 @@ std::vector<EurocGroundTruthState> ReadEurocGroundTruth(const std::string& path)
 
 std::string FindEurocMav0(const std::string& path) {
   std::error_code ec;
-  const fs::path p(path);
+  fs::path p = fs::path(path).lexically_normal();
+  if (p.filename().empty()) p = p.parent_path();  // trailing slash
   if (fs::is_directory(p / "mav0", ec)) return (p / "mav0").string();
   if (fs::exists(p / "imu0" / "data.csv", ec) || fs::exists(p / "cam0" / "data.csv", ec)) {
     return p.string();

@@ -71,7 +71,8 @@ struct EurocSequence {
   Rigid3d CamFromImu() const { return cam0.body_from_sensor.Inverse() * imu0.body_from_sensor; }
   std::string ImagePath(const StampedFile& f) const { return mav0 + "/cam0/data/" + f.path; }
 };
-// Returns the mav0 folder for a path that is mav0 itself or holds mav0/; empty when neither.
+// Returns the mav0 folder (normalised, no trailing slash) for a path that is mav0 itself or holds
+// mav0/; empty when neither.
 std::string FindEurocMav0(const std::string& path);
 EurocSequence ReadEurocSequence(const std::string& path, const ImuBufferOptions& options = {});
 

@@ -1,0 +1,456 @@
+#include "imumatch/io/dataset.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "imumatch/core/error.h"
+#include "imumatch/core/so3.h"
+#include "imumatch/core/time.h"
+#include "imumatch/io/euroc.h"
+#include "imumatch/io/imu_io.h"
+#include "imumatch/io/text_parsing.h"
+#include "imumatch/io/trajectory_io.h"
+#include "imumatch/sim/imu_simulator.h"
+
+namespace imumatch {
+namespace {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+
+std::string FolderName(const std::string& path) {
+  fs::path p = fs::path(path).lexically_normal();
+  if (p.filename().empty()) p = p.parent_path();
+  return p.filename().string();
+}
+
+bool Contains(const std::string& haystack, const std::string& needle) {
+  std::string h = haystack;
+  std::transform(h.begin(), h.end(), h.begin(), [](unsigned char c) { return std::tolower(c); });
+  return h.find(needle) != std::string::npos;
+}
+
+void CheckExists(const std::string& file, const std::string& list, int line) {
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec)) {
+    throw InputError(list, line, "listed file " + file + " not found");
+  }
+}
+
+// Keeps frames [first, first + max) (max 0 = all).
+void SelectFrames(std::vector<FrameRecord>& frames, const DatasetOptions& options) {
+  if (options.first_frame > 0) {
+    frames.erase(frames.begin(), frames.begin() + static_cast<std::ptrdiff_t>(std::min(
+                                                      options.first_frame, frames.size())));
+  }
+  if (options.max_frames > 0 && frames.size() > options.max_frames) {
+    frames.resize(options.max_frames);
+  }
+}
+
+std::string DescribeModel(const std::string& model) {
+  std::string m = model;
+  std::transform(m.begin(), m.end(), m.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (m == "euroc" || m == "adis16448") return "the EuRoC ADIS16448 noise model";
+  if (m == "mems" || m == "consumer") return "a consumer MEMS noise model";
+  if (m == "ideal" || m == "none") return "no noise (ideal IMU)";
+  return "the '" + model + "' noise model";
+}
+
+// ----- JSON helpers for sequence.json ------------------------------------------------------------
+
+const Json& Need(const Json& obj, const std::string& key, const std::string& path) {
+  if (!obj.is_object() || !obj.contains(key) || obj.at(key).is_null()) {
+    throw InputError(path, "missing key '" + key + "'");
+  }
+  return obj.at(key);
+}
+
+double NeedDouble(const Json& obj, const std::string& key, const std::string& path) {
+  const Json& v = Need(obj, key, path);
+  if (!v.is_number()) throw InputError(path, "'" + key + "' must be a number");
+  const double d = v.get<double>();
+  if (!std::isfinite(d)) throw InputError(path, "'" + key + "' is not finite");
+  return d;
+}
+
+std::vector<double> NeedDoubles(const Json& obj, const std::string& key, size_t n,
+                                const std::string& path) {
+  const Json& v = Need(obj, key, path);
+  if (!v.is_array() || v.size() != n) {
+    throw InputError(path, "'" + key + "' must be a list of " + std::to_string(n) + " numbers");
+  }
+  std::vector<double> out;
+  for (const Json& e : v) {
+    if (!e.is_number() || !std::isfinite(e.get<double>())) {
+      throw InputError(path, "'" + key + "' must hold finite numbers");
+    }
+    out.push_back(e.get<double>());
+  }
+  return out;
+}
+
+Eigen::Vector3d NeedVec3(const Json& obj, const std::string& key, const std::string& path) {
+  const std::vector<double> v = NeedDoubles(obj, key, 3, path);
+  return Eigen::Vector3d(v[0], v[1], v[2]);
+}
+
+Json ParseJsonFile(const std::string& path) {
+  const std::string text = ReadFileToString(path);
+  try {
+    return Json::parse(text);
+  } catch (const Json::parse_error& e) {
+    const size_t byte = std::min<size_t>(e.byte, text.size());
+    const int line = 1 + static_cast<int>(std::count(
+                             text.begin(), text.begin() + static_cast<std::ptrdiff_t>(byte), '\n'));
+    throw InputError(path, line, std::string("JSON syntax error: ") + e.what());
+  }
+}
+
+// "t vx vy vz" lines.
+std::map<int64_t, Eigen::Vector3d> ReadVelocities(const std::string& path) {
+  std::map<int64_t, Eigen::Vector3d> out;
+  int64_t previous = 0;
+  int previous_line = 0;
+  for (const TextLine& line : ReadTextFields(path, FieldSeparator::kWhitespace)) {
+    CheckFieldCount(line, 4, path, "t vx vy vz");
+    const int64_t t = ParseSecondsField(line.fields[0], path, line.line);
+    CheckIncreasingTimestamp(previous, previous_line, t, path, line.line);
+    out[t] = Eigen::Vector3d(ParseFiniteDouble(line.fields[1], path, line.line, "vx"),
+                             ParseFiniteDouble(line.fields[2], path, line.line, "vy"),
+                             ParseFiniteDouble(line.fields[3], path, line.line, "vz"));
+    previous = t;
+    previous_line = line.line;
+  }
+  return out;
+}
+
+// Frames from rgb (and depth, associated) lists of a TUM style folder.
+std::vector<FrameRecord> TumFrames(const TumRgbdFiles& files, int64_t max_difference_ns,
+                                   bool check_files) {
+  const std::string rgb_list = (fs::path(files.root) / "rgb.txt").string();
+  const std::string depth_list = (fs::path(files.root) / "depth.txt").string();
+  std::vector<FrameRecord> frames;
+  auto add = [&](const StampedFile& rgb, const StampedFile* depth) {
+    FrameRecord f;
+    f.t_ns = rgb.t_ns;
+    f.image_path = (fs::path(files.root) / rgb.path).string();
+    if (check_files) CheckExists(f.image_path, rgb_list, rgb.line);
+    if (depth != nullptr) {
+      f.depth_path = (fs::path(files.root) / depth->path).string();
+      if (check_files) CheckExists(f.depth_path, depth_list, depth->line);
+    }
+    frames.push_back(std::move(f));
+  };
+  if (files.depth.empty()) {
+    for (const StampedFile& rgb : files.rgb) add(rgb, nullptr);
+    return frames;
+  }
+  std::vector<int64_t> rgb_t, depth_t;
+  for (const StampedFile& f : files.rgb) rgb_t.push_back(f.t_ns);
+  for (const StampedFile& f : files.depth) depth_t.push_back(f.t_ns);
+  for (const Association& a : AssociateTimestamps(rgb_t, depth_t, max_difference_ns)) {
+    add(files.rgb[a.first], &files.depth[a.second]);
+  }
+  return frames;
+}
+
+std::vector<int64_t> FrameTimes(const std::vector<FrameRecord>& frames) {
+  std::vector<int64_t> t;
+  for (const FrameRecord& f : frames) t.push_back(f.t_ns);
+  return t;
+}
+
+}  // namespace
+
+const char* ToString(DatasetKind kind) {
+  switch (kind) {
+    case DatasetKind::kTumRgbd:
+      return "tum_rgbd";
+    case DatasetKind::kEuroc:
+      return "euroc";
+    case DatasetKind::kSynthetic:
+      return "synthetic";
+  }
+  return "unknown";
+}
+
+void DatasetOptions::Check() const {
+  if (camera) camera->Check();
+  IMUMATCH_CHECK(max_time_difference_ns >= 0, "max_time_difference_ns=" << max_time_difference_ns);
+  IMUMATCH_CHECK(groundtruth_max_difference_ns >= 0,
+                 "groundtruth_max_difference_ns=" << groundtruth_max_difference_ns);
+  ImuParams::FromName(imu_model);  // throws InvalidArgument for an unknown model
+  IMUMATCH_CHECK(tum_cam_from_imu.translation.allFinite() &&
+                     std::abs(tum_cam_from_imu.rotation.norm() - 1.0) < 1e-9,
+                 "tum_cam_from_imu must be a finite rigid transform");
+  spline.Check();
+  imu_buffer.Check();
+}
+
+PinholeCamera TumCameraForFolderName(const std::string& folder_name) {
+  if (Contains(folder_name, "freiburg1")) return PinholeCamera::TumFreiburg1();
+  PinholeCamera c = PinholeCamera::KinectDefault();
+  if (Contains(folder_name, "freiburg2")) {
+    c.fx = 520.9;
+    c.fy = 521.0;
+    c.cx = 325.1;
+    c.cy = 249.7;
+    c.distortion = {0.2312, -0.7849, -0.0033, -0.0001, 0.9172};
+  } else if (Contains(folder_name, "freiburg3")) {
+    c.fx = 535.4;
+    c.fy = 539.2;
+    c.cx = 320.1;
+    c.cy = 247.6;
+  }
+  return c;
+}
+
+Dataset LoadTumRgbdDataset(const std::string& root, const DatasetOptions& options) {
+  options.Check();
+  const TumRgbdFiles files = ReadTumRgbdFolder(root);
+  Dataset d;
+  d.kind = DatasetKind::kTumRgbd;
+  d.root = root;
+  d.name = FolderName(root);
+  std::error_code ec;
+  const std::string camera_txt = (fs::path(root) / "camera.txt").string();
+  if (options.camera) {
+    d.camera = *options.camera;
+  } else if (fs::exists(camera_txt, ec)) {
+    d.camera = ReadCameraFromText(camera_txt);
+  } else {
+    d.camera = TumCameraForFolderName(d.name);
+  }
+  d.frames = TumFrames(files, options.max_time_difference_ns, options.check_files_exist);
+  d.groundtruth_world_from_cam = files.groundtruth;
+  const auto gt =
+      LookUpGroundTruth(files.groundtruth, FrameTimes(d.frames), options.groundtruth_lookup,
+                        options.groundtruth_max_difference_ns);
+  for (size_t i = 0; i < d.frames.size(); ++i) d.frames[i].world_from_cam = gt[i];
+  SelectFrames(d.frames, options);
+
+  d.cam_from_imu = options.tum_cam_from_imu;
+  d.imu_params = ImuParams::FromName(options.imu_model);
+  d.imu = ImuBuffer(options.imu_buffer);
+  const std::string gt_path = (fs::path(root) / "groundtruth.txt").string();
+  if (!options.simulate_imu) {
+    d.imu_source_note = "no IMU (TUM RGB-D records no gyroscope; simulation disabled)";
+  } else if (files.groundtruth.size() < 4) {
+    d.imu_source_note =
+        "no IMU (TUM RGB-D records no gyroscope and there is no ground truth "
+        "to simulate one from)";
+  } else {
+    // The spline describes the camera (body = camera); the IMU sits at cam_from_imu in it.
+    const SplineTrajectory spline(files.groundtruth, options.spline);
+    ImuSimulatorOptions sim;
+    sim.rate_hz = d.imu_params.rate_hz;
+    sim.seed = options.imu_seed;
+    sim.body_from_imu = options.tum_cam_from_imu;
+    sim.t0_ns = spline.t0_ns();
+    for (const ImuSample& s : SimulateImu(spline, d.imu_params, sim)) {
+      d.imu.Push(s, "IMU simulated from " + gt_path, 0);
+    }
+    d.imu_simulated = true;
+    std::ostringstream note;
+    note << "IMU simulated from ground truth with " << DescribeModel(options.imu_model) << ", seed "
+         << options.imu_seed << " (" << d.imu_params.rate_hz << " Hz, spline knots every "
+         << options.spline.knot_spacing_s << " s)";
+    d.imu_source_note = note.str();
+    // IMU velocity: v_imu = v_cam + R_world_from_cam (omega_cam x t_cam_imu).
+    const Rigid3d cam_from_imu = options.tum_cam_from_imu;
+    for (FrameRecord& f : d.frames) {
+      const double t = spline.TimeOf(f.t_ns);
+      if (t < 0.0 || t > spline.EndTime()) continue;
+      const Rigid3d world_from_cam = spline.WorldFromBody(t);
+      f.imu_velocity_in_world =
+          spline.VelocityInWorld(t) +
+          world_from_cam.rotation * spline.AngularVelocityInBody(t).cross(cam_from_imu.translation);
+    }
+  }
+  return d;
+}
+
+Dataset LoadEurocDataset(const std::string& path, const DatasetOptions& options) {
+  options.Check();
+  EurocSequence seq = ReadEurocSequence(path, options.imu_buffer);
+  Dataset d;
+  d.kind = DatasetKind::kEuroc;
+  d.root = seq.mav0;
+  // Name of the folder above mav0 (e.g. V1_01_easy).
+  d.name = FolderName(fs::path(seq.mav0).lexically_normal().parent_path().string());
+  d.camera = options.camera ? *options.camera : seq.cam0.camera;
+  d.cam_from_imu = seq.CamFromImu();
+  d.imu_params = seq.imu0.params;
+  d.imu = std::move(seq.imu);
+  d.imu_simulated = false;
+  d.imu_source_note = "IMU recorded (EuRoC imu0, " + FormatDoubleExact(seq.imu0.params.rate_hz) +
+                      " Hz, noise model from imu0/sensor.yaml)";
+  const Rigid3d& body_from_cam = seq.cam0.body_from_sensor;
+  std::vector<StampedPose> body_poses;
+  for (const EurocGroundTruthState& s : seq.groundtruth) {
+    d.groundtruth_world_from_cam.push_back({s.t_ns, s.world_from_body * body_from_cam});
+    body_poses.push_back({s.t_ns, s.world_from_body});
+  }
+  const std::string list = seq.mav0 + "/cam0/data.csv";
+  for (const StampedFile& f : seq.images) {
+    FrameRecord r;
+    r.t_ns = f.t_ns;
+    r.image_path = seq.ImagePath(f);
+    if (options.check_files_exist) CheckExists(r.image_path, list, f.line);
+    d.frames.push_back(std::move(r));
+  }
+  const auto gt =
+      LookUpGroundTruth(d.groundtruth_world_from_cam, FrameTimes(d.frames),
+                        options.groundtruth_lookup, options.groundtruth_max_difference_ns);
+  for (size_t i = 0; i < d.frames.size(); ++i) {
+    FrameRecord& f = d.frames[i];
+    f.world_from_cam = gt[i];
+    // Velocity of the body (= the IMU in EuRoC) interpolated linearly between the neighbours.
+    const auto upper =
+        std::lower_bound(seq.groundtruth.begin(), seq.groundtruth.end(), f.t_ns,
+                         [](const EurocGroundTruthState& s, int64_t t) { return s.t_ns < t; });
+    if (upper == seq.groundtruth.end()) continue;
+    if (upper->t_ns == f.t_ns) {
+      f.imu_velocity_in_world = upper->velocity_in_world;
+    } else if (upper != seq.groundtruth.begin()) {
+      const auto& a = *std::prev(upper);
+      const auto& b = *upper;
+      if (f.t_ns - a.t_ns <= options.groundtruth_max_difference_ns &&
+          b.t_ns - f.t_ns <= options.groundtruth_max_difference_ns) {
+        const double alpha =
+            static_cast<double>(f.t_ns - a.t_ns) / static_cast<double>(b.t_ns - a.t_ns);
+        f.imu_velocity_in_world = (1.0 - alpha) * a.velocity_in_world + alpha * b.velocity_in_world;
+      }
+    }
+  }
+  SelectFrames(d.frames, options);
+  return d;
+}
+
+Dataset LoadSyntheticDataset(const std::string& root, const DatasetOptions& options) {
+  options.Check();
+  const std::string json_path = (fs::path(root) / "sequence.json").string();
+  const Json j = ParseJsonFile(json_path);
+  if (!j.is_object() || !j.contains("generator") || j.at("generator") != "imumatch synth") {
+    throw InputError(json_path,
+                     "not an imumatch synthetic sequence (\"generator\" is not "
+                     "\"imumatch synth\")");
+  }
+  Dataset d;
+  d.kind = DatasetKind::kSynthetic;
+  d.root = root;
+  d.name = FolderName(root);
+
+  const Json& cam = Need(j, "camera", json_path);
+  PinholeCamera c;
+  c.width = static_cast<int>(NeedDouble(cam, "width", json_path));
+  c.height = static_cast<int>(NeedDouble(cam, "height", json_path));
+  c.fx = NeedDouble(cam, "fx", json_path);
+  c.fy = NeedDouble(cam, "fy", json_path);
+  c.cx = NeedDouble(cam, "cx", json_path);
+  c.cy = NeedDouble(cam, "cy", json_path);
+  const std::vector<double> dist = NeedDoubles(cam, "distortion", 5, json_path);
+  std::copy(dist.begin(), dist.end(), c.distortion.begin());
+  c.depth_scale = NeedDouble(cam, "depth_scale", json_path);
+  try {
+    c.Check();
+  } catch (const InvalidArgument& e) {
+    throw InputError(json_path, std::string("camera: ") + e.what());
+  }
+  d.camera = options.camera ? *options.camera : c;
+
+  const Json& p = Need(j, "imu_params", json_path);
+  d.imu_params.gyro_noise_density = NeedDouble(p, "gyro_noise_density", json_path);
+  d.imu_params.gyro_random_walk = NeedDouble(p, "gyro_random_walk", json_path);
+  d.imu_params.accel_noise_density = NeedDouble(p, "accel_noise_density", json_path);
+  d.imu_params.accel_random_walk = NeedDouble(p, "accel_random_walk", json_path);
+  d.imu_params.rate_hz = NeedDouble(p, "rate_hz", json_path);
+  d.imu_params.gravity_in_world = NeedVec3(p, "gravity_in_world", json_path);
+  try {
+    d.imu_params.Check();
+  } catch (const InvalidArgument& e) {
+    throw InputError(json_path, std::string("imu_params: ") + e.what());
+  }
+
+  const Json& rows = Need(j, "cam_from_imu", json_path);
+  if (!rows.is_array() || rows.size() != 4) {
+    throw InputError(json_path, "'cam_from_imu' must be a 4x4 matrix (4 rows of 4 numbers)");
+  }
+  Eigen::Matrix4d m;
+  for (int r = 0; r < 4; ++r) {
+    const std::vector<double> row =
+        NeedDoubles(Json{{"row", rows[static_cast<size_t>(r)]}}, "row", 4, json_path);
+    for (int col = 0; col < 4; ++col) m(r, col) = row[static_cast<size_t>(col)];
+  }
+  try {
+    d.cam_from_imu = Rigid3d::FromMatrix(m, 1e-6);
+  } catch (const InvalidArgument& e) {
+    throw InputError(json_path, std::string("cam_from_imu is not a rigid transform: ") + e.what());
+  }
+  if (j.contains("cam_from_imu_quaternion_wxyz")) {
+    // The quaternion as written, so the extrinsic round-trips bit for bit.
+    const std::vector<double> q = NeedDoubles(j, "cam_from_imu_quaternion_wxyz", 4, json_path);
+    const Eigen::Quaterniond stored(q[0], q[1], q[2], q[3]);
+    if (std::abs(stored.norm() - 1.0) > 1e-9 ||
+        RotationDistance(stored, d.cam_from_imu.rotation) > 1e-6) {
+      throw InputError(json_path, "cam_from_imu_quaternion_wxyz disagrees with cam_from_imu");
+    }
+    d.cam_from_imu.rotation = stored;
+  }
+
+  // Frames, exact ground truth, velocities and the stored IMU.
+  const TumRgbdFiles files = ReadTumRgbdFolder(root);
+  d.frames = TumFrames(files, 1, options.check_files_exist);  // identical timestamps only
+  d.groundtruth_world_from_cam = files.groundtruth;
+  const std::string velocity_path = (fs::path(root) / "velocity.txt").string();
+  std::error_code ec;
+  const auto velocities = fs::exists(velocity_path, ec) ? ReadVelocities(velocity_path)
+                                                        : std::map<int64_t, Eigen::Vector3d>();
+  for (FrameRecord& f : d.frames) {
+    f.world_from_cam = InterpolatePoseAt(files.groundtruth, f.t_ns, 0);
+    if (const auto it = velocities.find(f.t_ns); it != velocities.end()) {
+      f.imu_velocity_in_world = it->second;
+    }
+  }
+  SelectFrames(d.frames, options);
+  d.imu = ReadImuText((fs::path(root) / "imu.txt").string(), options.imu_buffer);
+  d.imu_simulated = true;
+  std::ostringstream note;
+  note << "IMU simulated by imumatch synth";
+  auto text_field = [&j](const char* key) {
+    return j.contains(key) && j.at(key).is_string() ? j.at(key).get<std::string>() : std::string();
+  };
+  if (const std::string model = text_field("imu_model"); !model.empty()) {
+    note << " with " << DescribeModel(model);
+  }
+  if (j.contains("seed") && j.at("seed").is_number_integer()) {
+    note << ", seed " << j.at("seed").get<uint64_t>();
+  }
+  if (const std::string motion = text_field("motion"); !motion.empty()) {
+    note << " (motion " << motion << ")";
+  }
+  d.imu_source_note = note.str();
+  return d;
+}
+
+Dataset LoadDataset(const std::string& path, const DatasetOptions& options) {
+  options.Check();
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError(path, "dataset folder not found");
+  if (!fs::is_directory(path, ec)) throw InputError(path, "dataset path is not a folder");
+  const fs::path p(path);
+  if (fs::exists(p / "sequence.json", ec)) return LoadSyntheticDataset(path, options);
+  if (fs::exists(p / "rgb.txt", ec)) return LoadTumRgbdDataset(path, options);
+  if (!FindEurocMav0(path).empty()) return LoadEurocDataset(path, options);
+  throw InputError(path,
+                   "not a recognised dataset folder: expected sequence.json (imumatch synth), "
+                   "rgb.txt (TUM RGB-D) or mav0/ (EuRoC)");
+}
+
+}  // namespace imumatch

@@ -1,0 +1,243 @@
+#include "imumatch/io/dataset.h"
+
+#include <cmath>
+#include <filesystem>
+
+#include <gtest/gtest.h>
+
+#include "imumatch/core/error.h"
+#include "imumatch/core/so3.h"
+#include "imumatch/core/time.h"
+#include "imumatch/io/euroc.h"
+#include "imumatch/io/image_io.h"
+#include "imumatch/io/io_test_util.h"
+#include "imumatch/io/trajectory_io.h"
+#include "imumatch/sim/trajectory.h"
+#include "imumatch/testing/test_data.h"
+
+namespace imumatch {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::DataPath;
+using testing::ExpectInputError;
+using testing::TempDir;
+
+constexpr int64_t kT0 = 1305031102'000000000LL;  // a TUM-like epoch
+
+TEST(Dataset, LoadsEurocExcerptFromEitherFolder) {
+  for (const std::string& path :
+       {DataPath("euroc_v101_excerpt"), DataPath("euroc_v101_excerpt/mav0/")}) {
+    const Dataset d = LoadDataset(path);
+    EXPECT_EQ(d.kind, DatasetKind::kEuroc);
+    EXPECT_EQ(d.name, "euroc_v101_excerpt");
+    ASSERT_EQ(d.frames.size(), 20u);
+    EXPECT_EQ(d.frames[0].t_ns, 1403715273262142976LL);
+    EXPECT_EQ(d.frames[0].image_path,
+              DataPath("euroc_v101_excerpt/mav0/cam0/data/1403715273262142976.png"));
+    EXPECT_TRUE(d.frames[0].depth_path.empty());
+    EXPECT_FALSE(d.frames[0].world_from_cam.has_value());  // no ground truth in the excerpt
+    EXPECT_TRUE(d.groundtruth_world_from_cam.empty());
+    EXPECT_EQ(d.imu.size(), 29120u);
+    EXPECT_FALSE(d.imu_simulated);
+    EXPECT_NE(d.imu_source_note.find("recorded"), std::string::npos);
+    EXPECT_DOUBLE_EQ(d.camera.fx, 458.654);
+    EXPECT_EQ(d.camera.width, 752);
+    EXPECT_DOUBLE_EQ(d.imu_params.gyro_noise_density, 1.6968e-4);
+    // The camera looks along the body's x axis rotated by T_BS: the camera's z axis expressed in
+    // the IMU frame is the third column of (cam_from_imu)^-1 = T_BS (imu0 T_BS = identity).
+    const Eigen::Vector3d cam_z_in_imu =
+        d.cam_from_imu.Inverse().rotation * Eigen::Vector3d::UnitZ();
+    EXPECT_NEAR(cam_z_in_imu.x(), 0.00414029679422, 1e-6);
+    EXPECT_NEAR(cam_z_in_imu.z(), 0.999660727178, 1e-6);
+    // The first frames lie inside the IMU log.
+    EXPECT_GE(d.frames.front().t_ns, d.imu.begin_ns());
+    EXPECT_LE(d.frames.back().t_ns, d.imu.end_ns());
+  }
+  DatasetOptions options;
+  options.first_frame = 5;
+  options.max_frames = 3;
+  const Dataset sub = LoadDataset(DataPath("euroc_v101_excerpt"), options);
+  ASSERT_EQ(sub.frames.size(), 3u);
+  EXPECT_EQ(sub.frames[0].t_ns, 1403715273512143104LL);
+}
+
+TEST(Dataset, EurocGroundTruthBecomesWorldFromCam) {
+  TempDir dir;
+  const std::string mav0 = DataPath("euroc_v101_excerpt/mav0");
+  // A small EuRoC folder: the real sensor files, two frames, and a hand-made ground truth.
+  fs::create_directories(dir.Path("seq/mav0/cam0/data"));
+  fs::create_directories(dir.Path("seq/mav0/imu0"));
+  fs::copy_file(mav0 + "/cam0/sensor.yaml", dir.Path("seq/mav0/cam0/sensor.yaml"));
+  fs::copy_file(mav0 + "/imu0/sensor.yaml", dir.Path("seq/mav0/imu0/sensor.yaml"));
+  dir.Write("seq/mav0/cam0/data.csv",
+            "#timestamp [ns],filename\n1000000000,a.png\n1005000000,b.png\n");
+  WriteImage(dir.Path("seq/mav0/cam0/data/a.png"), cv::Mat(48, 64, CV_8UC1, cv::Scalar(9)));
+  WriteImage(dir.Path("seq/mav0/cam0/data/b.png"), cv::Mat(48, 64, CV_8UC1, cv::Scalar(9)));
+  std::string imu;
+  for (int i = 0; i <= 40; ++i) {
+    imu += std::to_string(950000000 + 5000000 * i) + ",0,0,0.1,0,0,9.81\n";
+  }
+  dir.Write("seq/mav0/imu0/data.csv", imu);
+  // Body at (1,2,3), yawed 90 degrees, moving at 0.5 m/s along x, at 1.00 s and 1.01 s.
+  dir.Write(
+      "seq/mav0/state_groundtruth_estimate0/data.csv",
+      "#timestamp,p,p,p,q,q,q,q,v,v,v,bw,bw,bw,ba,ba,ba\n"
+      "1000000000,1,2,3,0.70710678118654752,0,0,0.70710678118654752,0.5,0,0,0,0,0,0,0,0\n"
+      "1010000000,1.005,2,3,0.70710678118654752,0,0,0.70710678118654752,0.5,0,0,0,0,0,0,0,0\n");
+  const Dataset d = LoadDataset(dir.Path("seq"));
+  EXPECT_EQ(d.name, "seq");
+  ASSERT_EQ(d.frames.size(), 2u);
+  ASSERT_EQ(d.groundtruth_world_from_cam.size(), 2u);
+  const EurocCameraSensor cam0 = ReadEurocCameraSensor(mav0 + "/cam0/sensor.yaml");
+  const Rigid3d world_from_body(ExpSO3(Eigen::Vector3d(0, 0, M_PI / 2)), Eigen::Vector3d(1, 2, 3));
+  const Rigid3d expected0 = world_from_body * cam0.body_from_sensor;
+  ASSERT_TRUE(d.frames[0].world_from_cam.has_value());
+  EXPECT_LT((d.frames[0].world_from_cam->translation - expected0.translation).norm(), 1e-12);
+  EXPECT_LT(RotationDistance(d.frames[0].world_from_cam->rotation, expected0.rotation), 1e-12);
+  // Frame 1 at 1.005 s: halfway, interpolated.
+  ASSERT_TRUE(d.frames[1].world_from_cam.has_value());
+  EXPECT_LT((d.frames[1].world_from_cam->translation -
+             (expected0.translation + Eigen::Vector3d(0.0025, 0, 0)))
+                .norm(),
+            1e-12);
+  ASSERT_TRUE(d.frames[1].imu_velocity_in_world.has_value());
+  EXPECT_NEAR(d.frames[1].imu_velocity_in_world->x(), 0.5, 1e-12);
+}
+
+// Writes a TUM RGB-D folder: the real image pair as two frames (depth 4 ms after rgb) and a
+// ground truth sampled at 100 Hz from an analytic trajectory.
+struct TumFolder {
+  std::string root;
+  std::unique_ptr<Trajectory> truth;
+};
+TumFolder MakeTumFolder(const TempDir& dir, const std::string& name) {
+  TumFolder out;
+  out.root = dir.Path(name);
+  const std::string pair = DataPath("tum_fr1_xyz_pair/");
+  fs::create_directories(out.root + "/rgb");
+  fs::create_directories(out.root + "/depth");
+  fs::copy_file(pair + "img_prev.png", out.root + "/rgb/1.png");
+  fs::copy_file(pair + "img_curr.png", out.root + "/rgb/2.png");
+  fs::copy_file(pair + "dep_prev.png", out.root + "/depth/1.png");
+  fs::copy_file(pair + "dep_curr.png", out.root + "/depth/2.png");
+  dir.Write(name + "/rgb.txt",
+            "# color images\n1305031102.500000 rgb/1.png\n1305031102.533333 rgb/2.png\n");
+  dir.Write(name + "/depth.txt",
+            "# depth images\n1305031102.504000 depth/1.png\n1305031102.537333 depth/2.png\n"
+            "1305031103.900000 depth/2.png\n");
+  // Camera (z forward) looking horizontally, turning about the world z axis at 0.5 rad/s and
+  // moving at 0.2 m/s: world_from_cam(0) maps cam z -> world x, cam x -> world -y, cam y -> -z.
+  Eigen::Matrix3d r;
+  r << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  out.truth = std::make_unique<ConstantRateTrajectory>(Rigid3d(r, Eigen::Vector3d(1.0, 0.5, 1.5)),
+                                                       Eigen::Vector3d(0, -0.5, 0),
+                                                       Eigen::Vector3d(0.2, 0.1, 0.0), 2.0);
+  std::vector<StampedPose> gt;
+  for (int i = 0; i <= 200; ++i) {
+    gt.push_back({kT0 + i * 10'000'000LL, out.truth->WorldFromBody(0.01 * i)});
+  }
+  WriteTumTrajectory(out.root + "/groundtruth.txt", gt);
+  return out;
+}
+
+TEST(Dataset, TumFolderAssociatesAndSimulatesImuFromGroundTruth) {
+  TempDir dir;
+  const TumFolder tum = MakeTumFolder(dir, "rgbd_dataset_freiburg1_test");
+  const Dataset d = LoadDataset(tum.root);
+  EXPECT_EQ(d.kind, DatasetKind::kTumRgbd);
+  EXPECT_EQ(d.name, "rgbd_dataset_freiburg1_test");
+  // fr1 folder name -> TUM fr1 calibration.
+  EXPECT_DOUBLE_EQ(d.camera.fx, 517.3);
+  EXPECT_DOUBLE_EQ(d.camera.distortion[0], 0.2624);
+  ASSERT_EQ(d.frames.size(), 2u);  // the third depth image has no rgb partner
+  EXPECT_EQ(d.frames[0].t_ns, 1305031102'500000000LL);
+  EXPECT_EQ(d.frames[0].depth_path, tum.root + "/depth/1.png");
+  EXPECT_EQ(d.frames[1].image_path, tum.root + "/rgb/2.png");
+  const RgbdImages images = LoadRgbd(d.frames[1].image_path, d.frames[1].depth_path);
+  EXPECT_EQ(images.depth.size(), cv::Size(640, 480));
+  // Ground truth interpolated at 0.533333 s (between samples) vs the analytic pose.
+  for (const FrameRecord& f : d.frames) {
+    ASSERT_TRUE(f.world_from_cam.has_value());
+    const Rigid3d truth = tum.truth->WorldFromBody(NsToSeconds(f.t_ns - kT0));
+    EXPECT_LT((f.world_from_cam->translation - truth.translation).norm(), 1e-9);
+    EXPECT_LT(RotationDistance(f.world_from_cam->rotation, truth.rotation), 1e-9);
+  }
+  EXPECT_EQ(d.groundtruth_world_from_cam.size(), 201u);
+
+  // Simulated IMU: EuRoC model, seed 42, 200 Hz over the ground-truth span, with a note.
+  EXPECT_TRUE(d.imu_simulated);
+  EXPECT_NE(d.imu_source_note.find("IMU simulated from ground truth with the EuRoC ADIS16448 "
+                                   "noise model, seed 42"),
+            std::string::npos)
+      << d.imu_source_note;
+  EXPECT_EQ(d.imu.begin_ns(), kT0);
+  EXPECT_NEAR(static_cast<double>(d.imu.size()), 401.0, 1.0);
+  // Mean gyro over the middle second ~ the true rate (0, -0.5, 0) in the camera frame (noise and
+  // bias walk of the ADIS16448 are ~1e-3 rad/s here).
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  Eigen::Vector3d mean_accel = Eigen::Vector3d::Zero();
+  int n = 0;
+  for (const ImuSample& s : d.imu.Slice(kT0 + 500'000'000, kT0 + 1'500'000'000)) {
+    mean += s.gyro_rad_s;
+    mean_accel += s.accel_m_s2;
+    ++n;
+  }
+  mean /= n;
+  mean_accel /= n;
+  EXPECT_LT((mean - Eigen::Vector3d(0, -0.5, 0)).norm(), 0.01) << mean.transpose();
+  // Constant velocity: the accelerometer reads only gravity's reaction, +9.81 along world up =
+  // camera -y.
+  EXPECT_LT((mean_accel - Eigen::Vector3d(0, -9.81, 0)).norm(), 0.05) << mean_accel.transpose();
+  ASSERT_TRUE(d.frames[0].imu_velocity_in_world.has_value());
+  EXPECT_LT((*d.frames[0].imu_velocity_in_world - Eigen::Vector3d(0.2, 0.1, 0)).norm(), 1e-6);
+
+  // Fixed seed: identical on reload; another seed differs.
+  const Dataset again = LoadDataset(tum.root);
+  ASSERT_EQ(again.imu.size(), d.imu.size());
+  EXPECT_EQ(again.imu.samples()[100].gyro_rad_s, d.imu.samples()[100].gyro_rad_s);
+  DatasetOptions other;
+  other.imu_seed = 7;
+  other.groundtruth_lookup = GroundTruthLookup::kNearest;
+  const Dataset seven = LoadDataset(tum.root, other);
+  EXPECT_NE(seven.imu.samples()[100].gyro_rad_s, d.imu.samples()[100].gyro_rad_s);
+  // Nearest lookup: frame 1 (0.533333 s) takes the 0.53 s sample exactly.
+  const Rigid3d at_053 = tum.truth->WorldFromBody(0.53);
+  EXPECT_LT((seven.frames[1].world_from_cam->translation - at_053.translation).norm(), 1e-12);
+}
+
+TEST(Dataset, TumCameraFromCameraTxtOrOptions) {
+  TempDir dir;
+  const TumFolder tum = MakeTumFolder(dir, "my_sequence");
+  DatasetOptions options;
+  options.simulate_imu = false;
+  const Dataset kinect = LoadDataset(tum.root, options);
+  EXPECT_DOUBLE_EQ(kinect.camera.fx, 525.0);  // not a freiburg name: Kinect default
+  EXPECT_TRUE(kinect.imu.empty());
+  EXPECT_FALSE(kinect.imu_simulated);
+  dir.Write("my_sequence/camera.txt", "# fx fy cx cy w h\n500 501 320 240 640 480\n");
+  EXPECT_DOUBLE_EQ(LoadDataset(tum.root, options).camera.fy, 501.0);
+  options.camera = PinholeCamera::TumFreiburg1();
+  EXPECT_DOUBLE_EQ(LoadDataset(tum.root, options).camera.fx, 517.3);
+  EXPECT_DOUBLE_EQ(TumCameraForFolderName("rgbd_dataset_freiburg3_long_office").fx, 535.4);
+  EXPECT_DOUBLE_EQ(TumCameraForFolderName("rgbd_dataset_freiburg2_desk").cy, 249.7);
+}
+
+TEST(Dataset, MissingListedImageNamesListAndLine) {
+  TempDir dir;
+  const TumFolder tum = MakeTumFolder(dir, "seq");
+  fs::remove(tum.root + "/rgb/2.png");
+  ExpectInputError([&] { LoadDataset(tum.root); }, tum.root + "/rgb.txt", 3, "rgb/2.png not found");
+}
+
+TEST(Dataset, UnknownFolderAndBadOptions) {
+  TempDir dir;
+  ExpectInputError([&] { LoadDataset(dir.path()); }, dir.path(), 0, "not a recognised dataset");
+  ExpectInputError([&] { LoadDataset(dir.Path("missing")); }, dir.Path("missing"), 0, "not found");
+  DatasetOptions options;
+  options.imu_model = "phone9000";
+  EXPECT_THROW(LoadDataset(DataPath("euroc_v101_excerpt"), options), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace imumatch

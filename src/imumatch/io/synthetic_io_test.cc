@@ -1,0 +1,158 @@
+#include "imumatch/io/synthetic_io.h"
+
+#include <filesystem>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "imumatch/core/error.h"
+#include "imumatch/io/dataset.h"
+#include "imumatch/io/image_io.h"
+#include "imumatch/io/io_test_util.h"
+#include "imumatch/io/text_parsing.h"
+
+namespace imumatch {
+namespace {
+
+using testing::ExpectInputError;
+using testing::TempDir;
+
+// A small, fast sequence: 80x60 camera, 10 fps, coarse textures, noisy depth and IMU.
+struct Small {
+  SyntheticSequenceOptions options;
+  SyntheticSequence sequence;
+};
+const Small& SmallSequence() {
+  static const Small small = [] {
+    Small s;
+    s.options.motion = "left30";
+    s.options.motion_options.duration_s = 0.5;
+    s.options.motion_options.still_before_s = 0.2;
+    s.options.motion_options.still_after_s = 0.1;
+    s.options.frame_rate_hz = 10.0;
+    s.options.camera = PinholeCamera::KinectDefault();
+    s.options.camera.width = 80;
+    s.options.camera.height = 60;
+    s.options.camera.fx = s.options.camera.fy = 65.625;
+    s.options.camera.cx = 39.5;
+    s.options.camera.cy = 29.5;
+    s.options.imu_model = "mems";
+    s.options.imu_seed = 42;
+    s.options.imu_initial_bias.gyro = Eigen::Vector3d(0.01, -0.02, 0.003);
+    s.options.t0_ns = 1'000'000'123;
+    s.options.render.depth_noise.add_noise = true;
+    SceneOptions scene_options;
+    scene_options.texel_size_m = 0.04;
+    s.sequence = MakeSyntheticSequence(s.options, Scene(scene_options));
+    return s;
+  }();
+  return small;
+}
+
+TEST(SyntheticIo, WriteThenLoadRoundTripsExactly) {
+  const Small& small = SmallSequence();
+  const SyntheticSequence& seq = small.sequence;
+  ASSERT_GE(seq.frames.size(), 8u);
+  TempDir dir;
+  const std::string root = dir.Path("left30");
+  WriteSyntheticSequence(seq, small.options, root);
+
+  const Dataset d = LoadDataset(root);
+  EXPECT_EQ(d.kind, DatasetKind::kSynthetic);
+  EXPECT_EQ(d.name, "left30");
+  EXPECT_TRUE(d.imu_simulated);
+  EXPECT_NE(d.imu_source_note.find("seed 42"), std::string::npos) << d.imu_source_note;
+  EXPECT_NE(d.imu_source_note.find("left30"), std::string::npos) << d.imu_source_note;
+  // Camera, extrinsic and IMU model.
+  EXPECT_EQ(d.camera.width, 80);
+  EXPECT_EQ(d.camera.fx, seq.camera.fx);
+  EXPECT_EQ(d.camera.cy, seq.camera.cy);
+  EXPECT_EQ(d.camera.depth_scale, seq.camera.depth_scale);
+  EXPECT_LT((d.cam_from_imu.translation - seq.cam_from_imu.translation).norm(), 1e-15);
+  EXPECT_LT(RotationDistance(d.cam_from_imu.rotation, seq.cam_from_imu.rotation), 1e-15);
+  EXPECT_EQ(d.imu_params.gyro_noise_density, seq.imu_params.gyro_noise_density);
+  EXPECT_EQ(d.imu_params.accel_random_walk, seq.imu_params.accel_random_walk);
+  EXPECT_EQ(d.imu_params.rate_hz, seq.imu_params.rate_hz);
+  EXPECT_EQ(d.imu_params.gravity_in_world, seq.imu_params.gravity_in_world);
+  // Frames: timestamps, exact poses, velocities, identical images.
+  ASSERT_EQ(d.frames.size(), seq.frames.size());
+  ASSERT_EQ(d.groundtruth_world_from_cam.size(), seq.frames.size());
+  for (size_t i = 0; i < seq.frames.size(); ++i) {
+    const SyntheticFrame& f = seq.frames[i];
+    const FrameRecord& r = d.frames[i];
+    EXPECT_EQ(r.t_ns, f.t_ns);
+    ASSERT_TRUE(r.world_from_cam.has_value());
+    EXPECT_LT((r.world_from_cam->translation - f.world_from_cam.translation).norm(), 1e-9);
+    EXPECT_LT(RotationDistance(r.world_from_cam->rotation, f.world_from_cam.rotation), 1e-9);
+    ASSERT_TRUE(r.imu_velocity_in_world.has_value());
+    EXPECT_EQ(*r.imu_velocity_in_world, f.imu_velocity_in_world);
+    const cv::Mat rgb = LoadImage(r.image_path, ImageColor::kColor);
+    const cv::Mat depth = LoadDepth(r.depth_path, rgb.size());
+    EXPECT_EQ(cv::norm(rgb, f.rgb, cv::NORM_INF), 0.0) << r.image_path;
+    EXPECT_EQ(cv::norm(depth, f.depth, cv::NORM_INF), 0.0) << r.depth_path;
+  }
+  // The IMU, sample by sample, bit for bit.
+  ASSERT_EQ(d.imu.size(), seq.imu.size());
+  for (size_t i = 0; i < seq.imu.size(); ++i) {
+    EXPECT_EQ(d.imu.samples()[i].t_ns, seq.imu[i].t_ns);
+    EXPECT_EQ(d.imu.samples()[i].gyro_rad_s, seq.imu[i].gyro_rad_s);
+    EXPECT_EQ(d.imu.samples()[i].accel_m_s2, seq.imu[i].accel_m_s2);
+  }
+  // sequence.json says what made it.
+  const nlohmann::json j = nlohmann::json::parse(ReadFileToString(root + "/sequence.json"));
+  EXPECT_EQ(j.at("generator"), "imumatch synth");
+  EXPECT_EQ(j.at("motion"), "left30");
+  EXPECT_EQ(j.at("seed"), 42);
+  EXPECT_EQ(j.at("imu_model"), "mems");
+  EXPECT_EQ(j.at("imu_simulated"), true);
+  EXPECT_EQ(j.at("depth_noise"), true);
+  EXPECT_EQ(j.at("cam_from_imu").size(), 4u);
+  // camera.txt is readable by the camera module.
+  EXPECT_EQ(ReadCameraFromText(root + "/camera.txt").fx, seq.camera.fx);
+}
+
+TEST(SyntheticIo, RefusesNonEmptyFolderUnlessOverwrite) {
+  const Small& small = SmallSequence();
+  TempDir dir;
+  dir.Write("out/keep.txt", "x");
+  EXPECT_THROW(WriteSyntheticSequence(small.sequence, dir.Path("out")), Error);
+  SyntheticWriteOptions overwrite;
+  overwrite.overwrite = true;
+  WriteSyntheticSequence(small.sequence, dir.Path("out"), overwrite);
+  const Dataset d = LoadDataset(dir.Path("out"));
+  EXPECT_EQ(d.frames.size(), small.sequence.frames.size());
+  // Without the generating options the note still names the generator.
+  EXPECT_NE(d.imu_source_note.find("imumatch synth"), std::string::npos);
+}
+
+TEST(SyntheticIo, MalformedSequenceJson) {
+  const Small& small = SmallSequence();
+  TempDir dir;
+  const std::string root = dir.Path("seq");
+  WriteSyntheticSequence(small.sequence, root);
+  const std::string json = root + "/sequence.json";
+  dir.Write("seq/sequence.json", "{\n  \"generator\": \"imumatch synth\",\n  \"motion\": ,\n}\n");
+  ExpectInputError([&] { LoadDataset(root); }, json, 3, "JSON syntax error");
+  dir.Write("seq/sequence.json", "{\"generator\": \"something else\"}\n");
+  ExpectInputError([&] { LoadDataset(root); }, json, 0, "not an imumatch synthetic sequence");
+  dir.Write("seq/sequence.json", "{\"generator\": \"imumatch synth\"}\n");
+  ExpectInputError([&] { LoadDataset(root); }, json, 0, "missing key 'camera'");
+}
+
+TEST(SyntheticIo, CorruptImuFileNamesLine) {
+  const Small& small = SmallSequence();
+  TempDir dir;
+  const std::string root = dir.Path("seq");
+  WriteSyntheticSequence(small.sequence, small.options, root);
+  // Line 3 is the first sample (two comment lines); duplicate it as line 4.
+  std::string imu = ReadFileToString(root + "/imu.txt");
+  size_t first = 0;
+  for (int i = 0; i < 2; ++i) first = imu.find('\n', first) + 1;
+  const size_t end = imu.find('\n', first) + 1;
+  imu.insert(end, imu.substr(first, end - first));
+  dir.Write("seq/imu.txt", imu);
+  ExpectInputError([&] { LoadDataset(root); }, root + "/imu.txt", 4, "duplicate");
+}
+
+}  // namespace
+}  // namespace imumatch
