@@ -1,7 +1,9 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -76,5 +78,40 @@ class Scene {
   std::vector<SceneBox> boxes_;
   std::vector<SceneSurface> surfaces_;
 };
+
+// Slab test; inline because the renderer calls it for every pixel and box.
+inline double Scene::IntersectBoxLocal(int b, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                                       int* surface) const {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  const Eigen::Vector3d& h = boxes_[b].half_size;
+  double t_near = -kInf, t_far = kInf;
+  int axis_near = -1, axis_far = -1;
+  for (int k = 0; k < 3; ++k) {
+    if (d[k] == 0.0) {
+      if (o[k] < -h[k] || o[k] > h[k]) return kInf;
+      continue;
+    }
+    const double inv = 1.0 / d[k];
+    double t1 = (-h[k] - o[k]) * inv, t2 = (h[k] - o[k]) * inv;
+    if (t1 > t2) std::swap(t1, t2);
+    if (t1 > t_near) {
+      t_near = t1;
+      axis_near = k;
+    }
+    if (t2 < t_far) {
+      t_far = t2;
+      axis_far = k;
+    }
+  }
+  if (t_near > t_far) return kInf;
+  if (boxes_[b].is_room) {
+    if (t_far <= 1e-9 || axis_far < 0) return kInf;
+    *surface = 6 * b + 2 * axis_far + (d[axis_far] > 0.0 ? 1 : 0);
+    return t_far;
+  }
+  if (t_near <= 1e-9 || axis_near < 0) return kInf;
+  *surface = 6 * b + 2 * axis_near + (d[axis_near] > 0.0 ? 0 : 1);
+  return t_near;
+}
 
 }  // namespace imumatch
