@@ -527,10 +527,13 @@ void Surf::detectAndCompute(cv::InputArray image, cv::InputArray mask,
   cv::Mat desc;
   if (need_descriptors) desc.create(n, 64, CV_32F);
   const bool upright = options_.upright;
+  const float max_size = 10.f * static_cast<float>(std::max(gray.cols, gray.rows));
   cv::parallel_for_(cv::Range(0, n), [&](const cv::Range& range) {
     for (int k = range.start; k < range.end; ++k) {
       cv::KeyPoint& kp = keypoints[k];
-      if (!(kp.size > 0.f) || !std::isfinite(kp.pt.x) || !std::isfinite(kp.pt.y)) {
+      // Sizes beyond 10x the image cannot be described (and would overflow integer wavelet sizes).
+      if (!(kp.size > 0.f && kp.size < max_size) || !std::isfinite(kp.pt.x) ||
+          !std::isfinite(kp.pt.y)) {
         valid[k] = 0;
         continue;
       }

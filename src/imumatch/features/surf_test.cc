@@ -136,12 +136,13 @@ TEST(SurfTest, TinyImagesAndFarKeypointsAreHandled) {
     EXPECT_TRUE(kps.empty());
     EXPECT_EQ(desc.rows, 0);
   }
-  // Keypoints far outside the image cannot be described, upright or not.
+  // Keypoints far outside the image or absurdly large cannot be described, upright or not.
   for (const bool upright : {false, true}) {
     SurfOptions options;
     options.upright = upright;
     std::vector<cv::KeyPoint> kps = {cv::KeyPoint(-500.f, 10.f, 20.f),
-                                     cv::KeyPoint(100.f, 1e30f, 20.f)};
+                                     cv::KeyPoint(100.f, 1e30f, 20.f),
+                                     cv::KeyPoint(100.f, 100.f, 1e30f)};
     cv::Mat desc;
     Surf::Create(options)->compute(TumImage(), kps, desc);
     EXPECT_TRUE(kps.empty());
