@@ -47,7 +47,8 @@ struct Nearest2 {
   }
 };
 
-inline void Update(float d, int j, float& best, float& second, int& best_idx) {
+__attribute__((always_inline)) inline void Update(float d, int j, float& best, float& second,
+                                                  int& best_idx) {
   if (d < second) {
     if (d < best) {
       second = best;
@@ -59,7 +60,7 @@ inline void Update(float d, int j, float& best, float& second, int& best_idx) {
   }
 }
 
-inline uint64_t Load64(const uint8_t* p) {
+__attribute__((always_inline)) inline uint64_t Load64(const uint8_t* p) {
   uint64_t v;
   std::memcpy(&v, p, 8);
   return v;
@@ -67,15 +68,21 @@ inline uint64_t Load64(const uint8_t* p) {
 
 // Hamming kernel over W 64-bit words. Blocks of 4 queries keep their 4*W words in registers while
 // a chunk of B streams past. Compiled twice: with and without the POPCNT instruction.
+// always_inline: the kernel must be compiled inside its target("popcnt") caller, otherwise GCC
+// emits calls to the portable __popcountdi2.
 template <int W>
-inline void HammingBlockKernel(const DescriptorView& a, const DescriptorView& b, Nearest2& out) {
+__attribute__((always_inline)) inline void HammingBlockKernel(const DescriptorView& a,
+                                                              const DescriptorView& b,
+                                                              Nearest2& out) {
   const int n = a.rows, m = b.rows;
   for (int j0 = 0; j0 < m; j0 += kTrainChunk) {
     const int j1 = std::min(m, j0 + kTrainChunk);
     int i = 0;
     for (; i + kQueryBlock <= n; i += kQueryBlock) {
       uint64_t q[kQueryBlock][W];
+#pragma GCC unroll 4
       for (int u = 0; u < kQueryBlock; ++u) {
+#pragma GCC unroll 8
         for (int w = 0; w < W; ++w) q[u][w] = Load64(a.Row(i + u) + 8 * w);
       }
       float best[kQueryBlock], second[kQueryBlock];
@@ -88,9 +95,12 @@ inline void HammingBlockKernel(const DescriptorView& a, const DescriptorView& b,
       for (int j = j0; j < j1; ++j) {
         const uint8_t* row = b.Row(j);
         uint64_t t[W];
+#pragma GCC unroll 8
         for (int w = 0; w < W; ++w) t[w] = Load64(row + 8 * w);
+#pragma GCC unroll 4
         for (int u = 0; u < kQueryBlock; ++u) {
           int d = 0;
+#pragma GCC unroll 8
           for (int w = 0; w < W; ++w) d += __builtin_popcountll(q[u][w] ^ t[w]);
           Update(static_cast<float>(d), j, best[u], second[u], idx[u]);
         }
@@ -111,8 +121,9 @@ inline void HammingBlockKernel(const DescriptorView& a, const DescriptorView& b,
 }
 
 // Any multiple of 8 bytes: one pair at a time.
-inline void GenericKernel(const DescriptorView& a, const DescriptorView& b, Nearest2& out,
-                          DescriptorCostFn fn) {
+__attribute__((always_inline)) inline void GenericKernel(const DescriptorView& a,
+                                                         const DescriptorView& b, Nearest2& out,
+                                                         DescriptorCostFn fn) {
   for (int j0 = 0; j0 < b.rows; j0 += kTrainChunk) {
     const int j1 = std::min(b.rows, j0 + kTrainChunk);
     for (int i = 0; i < a.rows; ++i) {
@@ -130,10 +141,76 @@ void HammingPortable(const DescriptorView& a, const DescriptorView& b, Nearest2&
 }
 
 #if IMUMATCH_BF_X86
-__attribute__((target("popcnt"))) void HammingPopcnt(const DescriptorView& a,
-                                                     const DescriptorView& b, Nearest2& out) {
-  if (a.bytes == 32) return HammingBlockKernel<4>(a, b, out);
-  if (a.bytes == 64) return HammingBlockKernel<8>(a, b, out);
+// 32-byte descriptors (ORB, BRIEF-32, AKAZE-MLDB-32), written out by hand so the 16 query words
+// stay in registers and every distance is 4 POPCNTs (a templated loop version got vectorised by
+// GCC into an emulated popcount).
+__attribute__((target("popcnt"))) void Hamming32Popcnt(const DescriptorView& a,
+                                                       const DescriptorView& b, Nearest2& out) {
+  const int n = a.rows, m = b.rows;
+  for (int j0 = 0; j0 < m; j0 += kTrainChunk) {
+    const int j1 = std::min(m, j0 + kTrainChunk);
+    int i = 0;
+    for (; i + 4 <= n; i += 4) {
+      const uint8_t* r0 = a.Row(i);
+      const uint8_t* r1 = a.Row(i + 1);
+      const uint8_t* r2 = a.Row(i + 2);
+      const uint8_t* r3 = a.Row(i + 3);
+      const uint64_t a0 = Load64(r0), a1 = Load64(r0 + 8), a2 = Load64(r0 + 16),
+                     a3 = Load64(r0 + 24);
+      const uint64_t b0 = Load64(r1), b1 = Load64(r1 + 8), b2 = Load64(r1 + 16),
+                     b3 = Load64(r1 + 24);
+      const uint64_t c0 = Load64(r2), c1 = Load64(r2 + 8), c2 = Load64(r2 + 16),
+                     c3 = Load64(r2 + 24);
+      const uint64_t d0 = Load64(r3), d1 = Load64(r3 + 8), d2 = Load64(r3 + 16),
+                     d3 = Load64(r3 + 24);
+      float best0 = out.best[i], best1 = out.best[i + 1], best2 = out.best[i + 2],
+            best3 = out.best[i + 3];
+      float sec0 = out.second[i], sec1 = out.second[i + 1], sec2 = out.second[i + 2],
+            sec3 = out.second[i + 3];
+      int idx0 = out.best_idx[i], idx1 = out.best_idx[i + 1], idx2 = out.best_idx[i + 2],
+          idx3 = out.best_idx[i + 3];
+      for (int j = j0; j < j1; ++j) {
+        const uint8_t* row = b.Row(j);
+        const uint64_t t0 = Load64(row), t1 = Load64(row + 8), t2 = Load64(row + 16),
+                       t3 = Load64(row + 24);
+        const int e0 = __builtin_popcountll(a0 ^ t0) + __builtin_popcountll(a1 ^ t1) +
+                       __builtin_popcountll(a2 ^ t2) + __builtin_popcountll(a3 ^ t3);
+        const int e1 = __builtin_popcountll(b0 ^ t0) + __builtin_popcountll(b1 ^ t1) +
+                       __builtin_popcountll(b2 ^ t2) + __builtin_popcountll(b3 ^ t3);
+        const int e2 = __builtin_popcountll(c0 ^ t0) + __builtin_popcountll(c1 ^ t1) +
+                       __builtin_popcountll(c2 ^ t2) + __builtin_popcountll(c3 ^ t3);
+        const int e3 = __builtin_popcountll(d0 ^ t0) + __builtin_popcountll(d1 ^ t1) +
+                       __builtin_popcountll(d2 ^ t2) + __builtin_popcountll(d3 ^ t3);
+        Update(static_cast<float>(e0), j, best0, sec0, idx0);
+        Update(static_cast<float>(e1), j, best1, sec1, idx1);
+        Update(static_cast<float>(e2), j, best2, sec2, idx2);
+        Update(static_cast<float>(e3), j, best3, sec3, idx3);
+      }
+      out.best[i] = best0, out.best[i + 1] = best1, out.best[i + 2] = best2,
+      out.best[i + 3] = best3;
+      out.second[i] = sec0, out.second[i + 1] = sec1, out.second[i + 2] = sec2,
+      out.second[i + 3] = sec3;
+      out.best_idx[i] = idx0, out.best_idx[i + 1] = idx1, out.best_idx[i + 2] = idx2,
+      out.best_idx[i + 3] = idx3;
+    }
+    for (; i < n; ++i) {
+      const uint8_t* q = a.Row(i);
+      const uint64_t a0 = Load64(q), a1 = Load64(q + 8), a2 = Load64(q + 16), a3 = Load64(q + 24);
+      for (int j = j0; j < j1; ++j) {
+        const uint8_t* row = b.Row(j);
+        const int e = __builtin_popcountll(a0 ^ Load64(row)) +
+                      __builtin_popcountll(a1 ^ Load64(row + 8)) +
+                      __builtin_popcountll(a2 ^ Load64(row + 16)) +
+                      __builtin_popcountll(a3 ^ Load64(row + 24));
+        Update(static_cast<float>(e), j, out.best[i], out.second[i], out.best_idx[i]);
+      }
+    }
+  }
+}
+
+void HammingPopcnt(const DescriptorView& a, const DescriptorView& b, Nearest2& out) {
+  if (a.bytes == 32) return Hamming32Popcnt(a, b, out);
+  // Other lengths: one pair at a time through the POPCNT cost function.
   GenericKernel(a, b, out, SelectCostFunction(DescriptorNorm::kHamming, a.bytes));
 }
 

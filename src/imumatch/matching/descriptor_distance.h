@@ -36,7 +36,9 @@ void CheckCompatible(const DescriptorView& a, const DescriptorView& b);
 
 // Portable reference implementations (any byte count that is a multiple of 8 / any dimension).
 // Hamming: number of differing bits. L2: sum of squared differences.
-inline uint32_t HammingDistance(const uint8_t* a, const uint8_t* b, int bytes) {
+// always_inline so that callers compiled with target("popcnt") get the POPCNT instruction.
+__attribute__((always_inline)) inline uint32_t HammingDistance(const uint8_t* a, const uint8_t* b,
+                                                               int bytes) {
   uint32_t sum = 0;
   for (int k = 0; k < bytes; k += 8) {
     uint64_t x, y;

@@ -37,8 +37,7 @@ void GridIndex::BuildStrided(const unsigned char* xs, const unsigned char* ys, s
   cell_start_.assign(static_cast<size_t>(cells) + 1, 0);
   cell_of_.resize(n);
   index_.resize(n);
-  x_.resize(n);
-  y_.resize(n);
+  xy_.resize(2 * static_cast<size_t>(n));
   // Counting sort: histogram, exclusive prefix sum, scatter.
   for (int i = 0; i < n; ++i) {
     // NaN coordinates land in cell 0 and never satisfy a box test.
@@ -52,8 +51,8 @@ void GridIndex::BuildStrided(const unsigned char* xs, const unsigned char* ys, s
   for (int i = 0; i < n; ++i) {
     const int slot = cursor_[cell_of_[i]]++;
     index_[slot] = i;
-    x_[slot] = x_at(i);
-    y_[slot] = y_at(i);
+    xy_[2 * slot] = x_at(i);
+    xy_[2 * slot + 1] = y_at(i);
   }
 }
 

@@ -34,15 +34,27 @@ class GridIndex {
     if (index_.empty() || !(min_x <= max_x) || !(min_y <= max_y)) return;
     const int c0 = CellCol(min_x), c1 = CellCol(max_x);
     const int r0 = CellRow(min_y), r1 = CellRow(max_y);
+    // The box test is branch-free: slots are appended to a small buffer and the buffer is handed to
+    // f afterwards (about half the scanned points fail the test, a branch would mispredict a lot).
+    constexpr int kBuffer = 64;
+    int hits[kBuffer];
+    int count = 0;
     for (int r = r0; r <= r1; ++r) {
       const int row_base = r * cols_;
       const int begin = cell_start_[row_base + c0];
-      const int end = cell_start_[row_base + c1 + 1];  // cells of a row are contiguous
+      const int end = cell_start_[row_base + c1 + 1];  // the cells of a row are contiguous
       for (int k = begin; k < end; ++k) {
-        const float x = x_[k], y = y_[k];
-        if (x >= min_x && x <= max_x && y >= min_y && y <= max_y) f(index_[k], x, y);
+        const float x = xy_[2 * k], y = xy_[2 * k + 1];
+        hits[count] = k;
+        count += static_cast<int>((x >= min_x) & (x <= max_x) & (y >= min_y) & (y <= max_y));
+        if (count == kBuffer) {
+          for (int h = 0; h < count; ++h)
+            f(index_[hits[h]], xy_[2 * hits[h]], xy_[2 * hits[h] + 1]);
+          count = 0;
+        }
       }
     }
+    for (int h = 0; h < count; ++h) f(index_[hits[h]], xy_[2 * hits[h]], xy_[2 * hits[h] + 1]);
   }
 
   // Convenience for tests and tools: the indices inside the box, ascending.
@@ -66,7 +78,7 @@ class GridIndex {
   int rows_ = 0;
   std::vector<int> cell_start_;  // rows_*cols_ + 1 offsets into the arrays below
   std::vector<int> index_;       // original point index, sorted by cell (row-major)
-  std::vector<float> x_, y_;     // coordinates in the same order
+  std::vector<float> xy_;        // interleaved x, y in the same order
   std::vector<int> cell_of_;     // scratch for Build: each point's cell
   std::vector<int> cursor_;      // scratch for Build: next free slot per cell
 };

@@ -32,9 +32,8 @@ float SquaredNorm(const uint8_t* row, int bytes) {
 
 // Angle difference wrapped to [-180, 180).
 float WrapDegrees(float a) {
-  a = std::fmod(a + 180.0f, 360.0f);
-  if (a < 0.0f) a += 360.0f;
-  return a - 180.0f;
+  if (a >= 180.0f || a < -180.0f) a -= 360.0f * std::floor((a + 180.0f) / 360.0f);
+  return a;
 }
 
 }  // namespace

@@ -33,8 +33,10 @@ struct GuidedMatcherOptions {
   // both keypoints have a size.
   bool check_scale = true;
   double scale_tolerance_factor = 2.0;
-  // Grid cell size of the index over frame B (pixels).
-  double grid_cell_size = 24.0;
+  // Grid cell size of the index over frame B (pixels). Measured on the TUM pair (ORB 1000-8000,
+  // typical windows +-4..10 px): 8 px beats 16 and 24 px by 1.3-2x, because real keypoints cluster
+  // and a coarse cell makes every query scan its cluster; 4-6 px gains little more.
+  double grid_cell_size = 8.0;
 
   void Check() const;
 };

@@ -188,25 +188,29 @@ class CapturingReporter : public benchmark::ConsoleReporter {
     for (const Run& r : runs) {
       if (r.run_type != Run::RT_Iteration || r.error_occurred) continue;
       times_us[r.benchmark_name()] = r.GetAdjustedRealTime();  // in the benchmark's unit (us)
+      cpu_us[r.benchmark_name()] = r.GetAdjustedCPUTime();
       if (r.counters.count("kps_a")) kps[r.benchmark_name()] = r.counters.at("kps_a").value;
     }
     ConsoleReporter::ReportRuns(runs);
   }
   std::map<std::string, double> times_us;
+  std::map<std::string, double> cpu_us;
   std::map<std::string, double> kps;
 };
 
-void PrintSummary(const CapturingReporter& rep) {
+void PrintTable(const CapturingReporter& rep, const std::map<std::string, double>& times,
+                const char* what) {
   std::printf(
-      "\nSummary (single thread, real time per frame pair; guided = depth lookup +\n"
-      "prediction + grid build + matching; descriptor kernels: Hamming %s, L2 %s)\n",
-      DescriptorKernelName(DescriptorNorm::kHamming), DescriptorKernelName(DescriptorNorm::kL2));
+      "\n%s per frame pair, single thread (guided = depth lookup + prediction + grid build +\n"
+      "matching; descriptor kernels: Hamming %s, L2 %s)\n",
+      what, DescriptorKernelName(DescriptorNorm::kHamming),
+      DescriptorKernelName(DescriptorNorm::kL2));
   std::printf("%-10s %7s %11s %13s %13s %11s %11s %12s %12s\n", "features", "kps_a", "guided[us]",
               "cv knn+r[us]", "own BF+r[us]", "x vs knn", "x vs ownBF", "guided ns/kp",
               "knn ns/kp");
-  const auto get = [&rep](const std::string& name) {
-    auto it = rep.times_us.find(name);
-    return it == rep.times_us.end() ? -1.0 : it->second;
+  const auto get = [&times](const std::string& name) {
+    auto it = times.find(name);
+    return it == times.end() ? -1.0 : it->second;
   };
   for (int kind : {0, 1}) {
     for (int n : {500, 1000, 2000, 4000, 8000}) {
@@ -221,6 +225,15 @@ void PrintSummary(const CapturingReporter& rep) {
                   1000.0 * k / kp);
     }
   }
+}
+
+void PrintSummary(const CapturingReporter& rep) {
+  PrintTable(rep, rep.times_us, "Real (wall) time");
+  PrintTable(rep, rep.cpu_us, "CPU time");
+  const auto get = [&rep](const std::string& name) {
+    auto it = rep.times_us.find(name);
+    return it == rep.times_us.end() ? -1.0 : it->second;
+  };
   const double gd = get("BM_GuidedWithDistortion/sift:0/n:1000");
   const double g1 = get("BM_Guided/sift:0/n:1000");
   if (gd > 0 && g1 > 0) {
