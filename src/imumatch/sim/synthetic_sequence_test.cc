@@ -7,6 +7,7 @@
 #include "imumatch/core/error.h"
 #include "imumatch/core/so3.h"
 #include "imumatch/core/time.h"
+#include "imumatch/imu/imu_integrator.h"
 
 namespace imumatch {
 namespace {
@@ -78,6 +79,40 @@ TEST(SyntheticSequenceTest, SeedPairFramesAndImuAgree) {
   const Eigen::Quaterniond expected =
       seq.frames[0].world_from_imu.rotation.conjugate() * seq.frames[1].world_from_imu.rotation;
   EXPECT_LT(RotationDistance(imu_a_r_imu_b, expected), 1e-5);
+}
+
+// The frames' exact IMU states and the simulated samples are consistent: preintegrating the ideal
+// IMU between the seed frames and propagating the true state of frame A lands on frame B.
+TEST(SyntheticSequenceTest, ImuPropagationReachesTheNextFrame) {
+  for (const char* motion : {"front1m", "left30", "walk"}) {
+    SyntheticSequenceOptions options;
+    options.motion = motion;
+    options.frame_times_s = {options.motion_options.MotionStartTime(),
+                             options.motion_options.MotionEndTime()};
+    options.camera = SmallCamera(32);
+    options.imu_model = "ideal";
+    options.t0_ns = 7'000'000'000;
+    const SyntheticSequence seq = MakeSyntheticSequence(options, CoarseScene());
+    const SyntheticFrame& a = seq.frames[0];
+    const SyntheticFrame& b = seq.frames[1];
+    std::vector<ImuSample> samples;
+    for (const ImuSample& s : seq.imu) {
+      if (s.t_ns >= a.t_ns && s.t_ns <= b.t_ns) samples.push_back(s);
+    }
+    ASSERT_EQ(samples.front().t_ns, a.t_ns);
+    ASSERT_EQ(samples.back().t_ns, b.t_ns);
+    const ImuPreintegration pim = Preintegrate(samples, ImuBias(), seq.imu_params);
+    NavState state_a;
+    state_a.t_ns = a.t_ns;
+    state_a.world_from_imu = a.world_from_imu;
+    state_a.velocity_in_world = a.imu_velocity_in_world;
+    const NavState state_b = Propagate(state_a, pim, seq.imu_params.gravity_in_world);
+    EXPECT_LT((state_b.world_from_imu.translation - b.world_from_imu.translation).norm(), 2e-3)
+        << motion;
+    EXPECT_LT(RotationDistance(state_b.world_from_imu.rotation, b.world_from_imu.rotation), 1e-4)
+        << motion;
+    EXPECT_LT((state_b.velocity_in_world - b.imu_velocity_in_world).norm(), 2e-3) << motion;
+  }
 }
 
 TEST(SyntheticSequenceTest, FrameRateAndDeterminism) {
