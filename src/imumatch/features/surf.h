@@ -34,7 +34,10 @@ struct SurfOptions {
 // SURF detector and 64-dimensional descriptor, written from the paper, usable through the
 // cv::Feature2D interface (detect / compute / detectAndCompute).
 //
-// Keypoint conventions (those of OpenCV's xfeatures2d::SURF, so keypoints are interchangeable):
+// Keypoint conventions (size, response, octave and class_id as in OpenCV's xfeatures2d::SURF; the
+// angle as in OpenCV's SIFT/ORB/AKAZE). Differences from OpenCV's SURF: the filter sizes of octave
+// o > 0 follow the paper (15,27,39,51; ...) where OpenCV doubles those of octave 0 (18,30,42,54;
+// ...), and OpenCV's SURF measures angles counter-clockwise on screen (atan2(-dy, dx)).
 //   - pt: sub-pixel, sub-scale interpolated position; integer coordinates are pixel centres.
 //   - size: the (interpolated, not rounded) side L of the box filter that fired, in pixels. The
 //     scale of the keypoint, i.e. the sigma of the Gaussian that the filter approximates, is
@@ -42,11 +45,12 @@ struct SurfOptions {
 //     integer; it is kept fractional here. Note that the box-filter determinant of a Gaussian blob
 //     of standard deviation sigma_b peaks at s ~= 0.72 sigma_b (not at sigma_b as the exact
 //     Gaussian determinant would): sizes are scale-covariant but not equal to the blob sigma.
-//   - angle: dominant orientation in degrees in [0, 360), measured like every OpenCV detector:
+//   - angle: dominant orientation in degrees in [0, 360), measured like OpenCV's SIFT and ORB:
 //     atan2(dy, dx) in image coordinates (x right, y down), i.e. clockwise on screen. Rotating the
 //     image by +a degrees counter-clockwise on screen (cv::getRotationMatrix2D(c, a, 1)) changes
-//     the angles by -a. With upright = true the angle is 0 (OpenCV's SURF reports 270 there, an
-//     artefact of its internal convention; 0 means "image axes" here).
+//     the angles by -a. With upright = true the angle is 0, meaning "image axes" (OpenCV's SURF
+//     reports 270 there, an artefact of its internal convention; -1, "not applicable", would
+//     break code that rotates by the angle).
 //   - response: determinant of the approximated Hessian (Dxx*Dyy - (0.9*Dxy)^2) at the maximum.
 //   - octave: octave index (0-based). class_id: sign of the Laplacian (trace), +1 or -1, which a
 //     matcher may use to skip pairs of opposite sign (dark vs bright blobs).
