@@ -1,0 +1,159 @@
+#include "imumatch/eval/match_image.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <iomanip>
+#include <sstream>
+
+#include <Eigen/Eigenvalues>
+#include <opencv2/imgproc.hpp>
+
+#include "imumatch/core/error.h"
+#include "imumatch/eval/plots.h"
+#include "imumatch/io/image_io.h"
+
+namespace imumatch {
+namespace {
+
+const cv::Scalar kGreen(40, 200, 40);
+const cv::Scalar kRed(40, 40, 230);
+const cv::Scalar kWindow(230, 160, 0);
+const cv::Scalar kEllipse(220, 60, 200);
+
+void DashedLine(cv::Mat& img, cv::Point2f a, cv::Point2f b, const cv::Scalar& color, int thickness,
+                float dash = 8.0f, float gap = 6.0f) {
+  const cv::Point2f d = b - a;
+  const float len = std::sqrt(d.dot(d));
+  if (len < 1e-3f) return;
+  const cv::Point2f u = d / len;
+  for (float s = 0.0f; s < len; s += dash + gap) {
+    const float e = std::min(len, s + dash);
+    cv::line(img, a + u * s, a + u * e, color, thickness, cv::LINE_AA);
+  }
+}
+
+cv::Mat ToBgr(const cv::Mat& image) {
+  cv::Mat out;
+  if (image.channels() == 1) {
+    cv::cvtColor(image, out, cv::COLOR_GRAY2BGR);
+  } else if (image.channels() == 4) {
+    cv::cvtColor(image, out, cv::COLOR_BGRA2BGR);
+  } else {
+    out = image.clone();
+  }
+  return out;
+}
+
+std::string Safe(std::string s) {
+  for (char& c : s) {
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '_';
+  }
+  return s;
+}
+
+}  // namespace
+
+void MatchImageOptions::Check() const {
+  IMUMATCH_CHECK(std::isfinite(threshold_px) && threshold_px > 0.0,
+                 "threshold_px = " << threshold_px);
+  IMUMATCH_CHECK(max_windows >= 0, "max_windows = " << max_windows);
+}
+
+cv::Mat DrawMatchImage(const PairVisual& visual, size_t run_index,
+                       const MatchImageOptions& options) {
+  options.Check();
+  IMUMATCH_CHECK(run_index < visual.runs.size(), "run_index " << run_index);
+  IMUMATCH_CHECK(!visual.image_a.empty() && !visual.image_b.empty(), "empty images");
+  const PairVisual::Run& run = visual.runs[run_index];
+  const cv::Mat a = ToBgr(visual.image_a), b = ToBgr(visual.image_b);
+  const int header = 34;
+  cv::Mat canvas(std::max(a.rows, b.rows) + header, a.cols + b.cols, CV_8UC3,
+                 cv::Scalar(255, 255, 255));
+  a.copyTo(canvas(cv::Rect(0, header, a.cols, a.rows)));
+  b.copyTo(canvas(cv::Rect(a.cols, header, b.cols, b.rows)));
+  const cv::Point2f off_a(0.0f, header), off_b(static_cast<float>(a.cols), header);
+
+  if (options.draw_unmatched_keypoints) {
+    for (const auto& kp : visual.keypoints_a)
+      cv::circle(canvas, kp.pt + off_a, 2, cv::Scalar(0, 200, 255), 1);
+    for (const auto& kp : visual.keypoints_b)
+      cv::circle(canvas, kp.pt + off_b, 2, cv::Scalar(0, 200, 255), 1);
+  }
+  // Search windows on frame B.
+  cv::Mat right = canvas(cv::Rect(a.cols, header, b.cols, b.rows));
+  int windows = 0;
+  for (const Match& m : run.matches) {
+    if (windows >= options.max_windows) break;
+    if (m.query_idx < 0 || static_cast<size_t>(m.query_idx) >= run.predictions.size()) continue;
+    const KeypointPrediction& p = run.predictions[m.query_idx];
+    if (!p.HasWindow()) continue;
+    ++windows;
+    cv::rectangle(right, cv::Point2f(p.min_x, p.min_y), cv::Point2f(p.max_x, p.max_y), kWindow, 1,
+                  cv::LINE_AA);
+    if (p.status == PredictionStatus::kWithoutDepth) {
+      cv::line(right, cv::Point2f(p.segment_start.x(), p.segment_start.y()),
+               cv::Point2f(p.segment_end.x(), p.segment_end.y()), kWindow, 1, cv::LINE_AA);
+    } else if (p.covariance.squaredNorm() > 0.0f) {
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2f> es(p.covariance);
+      const Eigen::Vector2f ev = es.eigenvalues().cwiseMax(0.0f);
+      const Eigen::Vector2f major = es.eigenvectors().col(1);
+      const float k = std::sqrt(9.21f);  // 99% gate, 2 dof
+      const float angle = std::atan2(major.y(), major.x()) * 180.0f / static_cast<float>(M_PI);
+      cv::ellipse(
+          right,
+          cv::RotatedRect(cv::Point2f(p.uv.x(), p.uv.y()),
+                          cv::Size2f(2 * k * std::sqrt(ev(1)), 2 * k * std::sqrt(ev(0))), angle),
+          kEllipse, 1, cv::LINE_AA);
+    }
+  }
+  int correct = 0;
+  for (size_t i = 0; i < run.matches.size(); ++i) {
+    const Match& m = run.matches[i];
+    const cv::Point2f pa = visual.keypoints_a[m.query_idx].pt + off_a;
+    const cv::Point2f pb = visual.keypoints_b[m.train_idx].pt + off_b;
+    const MatchResidual& r = run.residuals[i];
+    const bool ok = r.kind != ResidualKind::kUnjudgeable && r.residual_px <= options.threshold_px;
+    if (ok) {
+      ++correct;
+      cv::line(canvas, pa, pb, kGreen, 1, cv::LINE_AA);
+    } else {
+      DashedLine(canvas, pa, pb, kRed, 1);
+    }
+    cv::circle(canvas, pa, 3, ok ? kGreen : kRed, 1, cv::LINE_AA);
+    cv::circle(canvas, pb, 3, ok ? kGreen : kRed, 1, cv::LINE_AA);
+  }
+  std::ostringstream text;
+  text << visual.case_name << " pair " << visual.pair_index << "  " << ToString(visual.detector)
+       << "  " << DisplayName(run.method) << ": " << run.matches.size() << " matches, " << correct
+       << " correct (green), " << run.matches.size() - static_cast<size_t>(correct)
+       << " false (red dashed) @ " << std::fixed << std::setprecision(1) << options.threshold_px
+       << " px";
+  if (!run.predictions.empty()) text << "; windows on B";
+  cv::putText(canvas, text.str(), {8, 23}, cv::FONT_HERSHEY_SIMPLEX, 0.55, cv::Scalar(0, 0, 0), 1,
+              cv::LINE_AA);
+  cv::line(canvas, {a.cols, header}, {a.cols, canvas.rows}, cv::Scalar(255, 255, 255), 2);
+  return canvas;
+}
+
+std::vector<std::string> WriteMatchImages(const std::string& dir,
+                                          const std::vector<PairVisual>& visuals,
+                                          const MatchImageOptions& options) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw Error("cannot create output folder " + dir + ": " + ec.message());
+  std::vector<std::string> written;
+  for (const PairVisual& v : visuals) {
+    for (size_t i = 0; i < v.runs.size(); ++i) {
+      const std::string name = "match_" + Safe(v.case_name) + "_" + std::to_string(v.pair_index) +
+                               "_" + ToString(v.detector) + "_" + ToString(v.runs[i].method) +
+                               ".png";
+      const std::string path = (std::filesystem::path(dir) / name).string();
+      WriteImage(path, DrawMatchImage(v, i, options));
+      written.push_back(path);
+    }
+  }
+  return written;
+}
+
+}  // namespace imumatch

@@ -1,0 +1,392 @@
+#include "imumatch/eval/report.h"
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <map>
+#include <sstream>
+
+#include "imumatch/core/error.h"
+
+namespace imumatch {
+namespace {
+
+std::string Fixed(double v, int digits) {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(digits) << v;
+  return out.str();
+}
+
+std::vector<std::string> Cases(const std::vector<MethodSummary>& summaries) {
+  std::vector<std::string> cases;
+  for (const auto& s : summaries) {
+    if (std::find(cases.begin(), cases.end(), s.case_name) == cases.end())
+      cases.push_back(s.case_name);
+  }
+  return cases;
+}
+
+// Rows (detector, method) in order of appearance.
+std::vector<std::pair<DetectorKind, MatchMethod>> Rows(
+    const std::vector<MethodSummary>& summaries) {
+  std::vector<std::pair<DetectorKind, MatchMethod>> rows;
+  for (const auto& s : summaries) {
+    const auto key = std::make_pair(s.detector, s.method);
+    if (std::find(rows.begin(), rows.end(), key) == rows.end()) rows.push_back(key);
+  }
+  std::stable_sort(rows.begin(), rows.end(), [](const auto& a, const auto& b) {
+    if (a.first != b.first) return static_cast<int>(a.first) < static_cast<int>(b.first);
+    return static_cast<int>(a.second) < static_cast<int>(b.second);
+  });
+  return rows;
+}
+
+const MethodSummary* Find(const std::vector<MethodSummary>& summaries, const std::string& c,
+                          DetectorKind d, MatchMethod m) {
+  for (const auto& s : summaries) {
+    if (s.case_name == c && s.detector == d && s.method == m) return &s;
+  }
+  return nullptr;
+}
+
+template <typename Cell>
+std::string CaseTable(const std::vector<MethodSummary>& summaries, Cell cell) {
+  const auto cases = Cases(summaries);
+  std::ostringstream out;
+  out << "| Detector | Method |";
+  for (const auto& c : cases) out << " " << c << " |";
+  out << "\n|---|---|";
+  for (size_t i = 0; i < cases.size(); ++i) out << "---:|";
+  out << "\n";
+  for (const auto& [d, m] : Rows(summaries)) {
+    out << "| " << ToString(d) << " | " << DisplayName(m) << " |";
+    for (const auto& c : cases) {
+      const MethodSummary* s = Find(summaries, c, d, m);
+      out << " " << (s ? cell(*s) : std::string("-")) << " |";
+    }
+    out << "\n";
+  }
+  return out.str();
+}
+
+nlohmann::json StatsJson(const StageStats& s) {
+  return {{"mean", s.mean}, {"p50", s.p50}, {"p90", s.p90}, {"p99", s.p99}, {"count", s.count}};
+}
+
+}  // namespace
+
+std::string CsvField(const std::string& field) {
+  if (field.find_first_of(",\"\n\r") == std::string::npos) return field;
+  std::string out = "\"";
+  for (char c : field) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  return out + "\"";
+}
+
+std::string MarkdownTimeTable(const std::vector<MethodSummary>& summaries) {
+  return CaseTable(summaries, [](const MethodSummary& s) {
+    return Fixed(s.match_ms.mean, 2) + " / " + Fixed(s.total_ms.mean, 1);
+  });
+}
+
+std::string MarkdownMatchTable(const std::vector<MethodSummary>& summaries) {
+  return CaseTable(summaries, [](const MethodSummary& s) {
+    return Fixed(s.matches, 1) + " / " + Fixed(s.wrong, 1);
+  });
+}
+
+std::string MarkdownDetailTable(const std::vector<MethodSummary>& summaries) {
+  std::ostringstream out;
+  out << "| Case | Detector | Method | Pairs | Keypoints | Extract ms | Predict ms | Match ms "
+         "(mean/p50/p90/p99) | Total ms | Matches | Correct | False | Precision | Recall |\n"
+         "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const auto& s : summaries) {
+    out << "| " << s.case_name << " | " << ToString(s.detector) << " | " << DisplayName(s.method)
+        << " | " << s.pairs << " | " << Fixed(s.keypoints, 0) << " | "
+        << Fixed(s.extract_ms.mean, 1) << " | " << Fixed(s.predict_ms.mean, 2) << " | "
+        << Fixed(s.match_ms.mean, 2) << " / " << Fixed(s.match_ms.p50, 2) << " / "
+        << Fixed(s.match_ms.p90, 2) << " / " << Fixed(s.match_ms.p99, 2) << " | "
+        << Fixed(s.total_ms.mean, 1) << " | " << Fixed(s.matches, 1) << " | " << Fixed(s.correct, 1)
+        << " | " << Fixed(s.wrong, 1) << " | " << Fixed(s.precision, 3) << " | "
+        << Fixed(s.recall, 3) << " |\n";
+  }
+  return out.str();
+}
+
+std::string MarkdownSpeedupTable(const std::vector<MethodSummary>& summaries) {
+  std::ostringstream out;
+  out << "| Case | Detector | BF match ms | Guided match ms (incl. predict) | Speed-up | BF "
+         "correct "
+         "| Guided correct | BF precision | Guided precision |\n"
+         "|---|---|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const auto& c : Cases(summaries)) {
+    for (const auto& [d, m] : Rows(summaries)) {
+      if (m != MatchMethod::kGuided) continue;
+      const MethodSummary* g = Find(summaries, c, d, MatchMethod::kGuided);
+      const MethodSummary* b = Find(summaries, c, d, MatchMethod::kBruteForce);
+      if (!g || !b) continue;
+      const double guided_ms = g->match_ms.mean + g->predict_ms.mean;
+      out << "| " << c << " | " << ToString(d) << " | " << Fixed(b->match_ms.mean, 2) << " | "
+          << Fixed(guided_ms, 2) << " | x"
+          << Fixed(guided_ms > 0 ? b->match_ms.mean / guided_ms : 0.0, 1) << " | "
+          << Fixed(b->correct, 1) << " | " << Fixed(g->correct, 1) << " | "
+          << Fixed(b->precision, 3) << " | " << Fixed(g->precision, 3) << " |\n";
+    }
+  }
+  return out.str();
+}
+
+std::string MarkdownThresholdTable(const std::vector<DetectorPairRecord>& records,
+                                   const std::vector<double>& thresholds_px) {
+  std::ostringstream out;
+  out << "| Detector | Method |";
+  for (double t : thresholds_px) out << " precision @" << Fixed(t, 1) << " px |";
+  out << "\n|---|---|";
+  for (size_t i = 0; i < thresholds_px.size(); ++i) out << "---:|";
+  out << "\n";
+  std::map<std::pair<int, int>, std::vector<std::pair<double, double>>> acc;  // correct, matches
+  for (const auto& r : records) {
+    for (const auto& run : r.runs) {
+      auto& v = acc[{static_cast<int>(r.detector), static_cast<int>(run.method)}];
+      v.resize(thresholds_px.size());
+      for (size_t i = 0; i < thresholds_px.size(); ++i) {
+        const JudgedCounts c = CountCorrect(run.residuals, thresholds_px[i]);
+        v[i].first += c.correct;
+        v[i].second += c.matches;
+      }
+    }
+  }
+  for (const auto& [key, v] : acc) {
+    out << "| " << ToString(static_cast<DetectorKind>(key.first)) << " | "
+        << DisplayName(static_cast<MatchMethod>(key.second)) << " |";
+    for (const auto& [correct, matches] : v) {
+      out << " " << (matches > 0 ? Fixed(correct / matches, 3) : std::string("-")) << " |";
+    }
+    out << "\n";
+  }
+  return out.str();
+}
+
+std::string MarkdownReport(const EvaluationResult& result, const ReportContext& context,
+                           size_t max_skipped) {
+  const auto summaries = Summarize(result.records, context.threshold.threshold_px);
+  std::ostringstream out;
+  out << "# " << context.title << "\n\n";
+  for (const auto& [k, v] : context.config) out << "- " << k << ": " << v << "\n";
+  out << "- pairs: " << result.pairs_total << " selected, " << result.skipped.size()
+      << " skipped entries; wall time " << Fixed(result.wall_s, 1) << " s\n";
+  out << "- correct match: " << context.threshold.description << "\n";
+  for (const auto& n : result.notes) out << "- note: " << n << "\n";
+  out << "\n## Table I: time per pair, match ms / total ms (mean)\n\n"
+      << "total = feature extraction of both frames + IMU motion + prediction + matching\n\n"
+      << MarkdownTimeTable(summaries);
+  out << "\n## Table II: matches / false matches per pair (mean, threshold "
+      << Fixed(context.threshold.threshold_px, 2) << " px)\n\n"
+      << MarkdownMatchTable(summaries);
+  out << "\n## IMU-guided vs brute force\n\n" << MarkdownSpeedupTable(summaries);
+  out << "\n## Details\n\n" << MarkdownDetailTable(summaries);
+  if (!context.fixed_thresholds.empty()) {
+    out << "\n## Precision at fixed thresholds (all cases pooled)\n\n"
+        << MarkdownThresholdTable(result.records, context.fixed_thresholds);
+  }
+  if (context.end_to_end && context.end_to_end->frames > 0) {
+    out << "\n## End-to-end\n\n" << context.end_to_end->Describe() << "\n";
+  }
+  if (!result.skipped.empty()) {
+    out << "\n## Skipped\n\n";
+    for (size_t i = 0; i < result.skipped.size() && i < max_skipped; ++i) {
+      const auto& s = result.skipped[i];
+      out << "- " << s.case_name << " pair " << s.pair_index << " (frames " << s.frame_a << ", "
+          << s.frame_b << ")" << (s.detector.empty() ? "" : " " + s.detector) << ": " << s.reason
+          << "\n";
+    }
+    if (result.skipped.size() > max_skipped) {
+      out << "- ... " << result.skipped.size() - max_skipped << " more in skipped.csv\n";
+    }
+  }
+  return out.str();
+}
+
+void WriteSummaryCsv(std::ostream& out, const std::vector<MethodSummary>& summaries) {
+  out << "case,detector,method,pairs,keypoints,read_ms_mean,extract_ms_mean,extract_ms_p50,"
+         "extract_ms_p90,extract_ms_p99,predict_ms_mean,predict_ms_p50,predict_ms_p90,"
+         "predict_ms_p99,match_ms_mean,match_ms_p50,match_ms_p90,match_ms_p99,total_ms_mean,"
+         "total_ms_p50,total_ms_p90,total_ms_p99,matches,correct,false,possible,precision,recall,"
+         "epipolar_fraction\n";
+  out << std::setprecision(6);
+  for (const auto& s : summaries) {
+    out << CsvField(s.case_name) << "," << ToString(s.detector) << "," << ToString(s.method) << ","
+        << s.pairs << "," << s.keypoints << "," << s.read_ms.mean;
+    for (const StageStats* st : {&s.extract_ms, &s.predict_ms, &s.match_ms, &s.total_ms}) {
+      out << "," << st->mean << "," << st->p50 << "," << st->p90 << "," << st->p99;
+    }
+    out << "," << s.matches << "," << s.correct << "," << s.wrong << "," << s.possible << ","
+        << s.precision << "," << s.recall << "," << s.epipolar_fraction << "\n";
+  }
+}
+
+void WritePairsCsv(std::ostream& out, const std::vector<DetectorPairRecord>& records,
+                   double threshold_px) {
+  out << "case,pair,frame_a,frame_b,t_a_ns,t_b_ns,detector,method,keypoints_a,keypoints_b,"
+         "keypoints_a_with_depth,read_ms,extract_ms,motion_ms,predict_ms,match_ms,matches,correct,"
+         "false,possible,precision,recall,motion_rotation_error_deg,motion_translation_error_m\n";
+  out << std::setprecision(6);
+  for (const auto& r : records) {
+    for (const auto& run : r.runs) {
+      const RunCounts c = CountRun(r, run, threshold_px);
+      out << CsvField(r.case_name) << "," << r.pair_index << "," << r.frame_a << "," << r.frame_b
+          << "," << r.t_a_ns << "," << r.t_b_ns << "," << ToString(r.detector) << ","
+          << ToString(run.method) << "," << r.keypoints_a << "," << r.keypoints_b << ","
+          << r.keypoints_a_with_depth << "," << r.read_ms << "," << r.extract_ms << ","
+          << (UsesPrediction(run.method) ? r.motion_ms : 0.0) << "," << run.predict_ms << ","
+          << run.match_ms << "," << c.counts.matches << "," << c.counts.correct << ","
+          << c.counts.wrong << "," << c.possible << "," << c.precision << "," << c.recall << ","
+          << r.motion_rotation_error_deg << "," << r.motion_translation_error_m << "\n";
+    }
+  }
+}
+
+void WriteSkippedCsv(std::ostream& out, const std::vector<SkippedPair>& skipped) {
+  out << "case,pair,frame_a,frame_b,detector,reason\n";
+  for (const auto& s : skipped) {
+    out << CsvField(s.case_name) << "," << s.pair_index << "," << s.frame_a << "," << s.frame_b
+        << "," << CsvField(s.detector) << "," << CsvField(s.reason) << "\n";
+  }
+}
+
+nlohmann::json ReportToJson(const EvaluationResult& result, const ReportContext& context) {
+  using nlohmann::json;
+  const double thr = context.threshold.threshold_px;
+  json j;
+  j["title"] = context.title;
+  json t = {{"threshold_px", thr}, {"description", context.threshold.description}};
+  if (context.threshold.automatic) {
+    const AutoThreshold& a = *context.threshold.automatic;
+    t["automatic"] = {
+        {"median_px", a.median_px}, {"mad_sigma_px", a.mad_sigma_px}, {"k", a.k},
+        {"gate_px", a.gate_px},     {"samples", a.samples},           {"clamped", a.clamped},
+        {"fallback", a.fallback}};
+  }
+  j["threshold"] = t;
+  json config = json::object();
+  for (const auto& [k, v] : context.config) config[k] = v;
+  j["config"] = config;
+  j["pairs_total"] = result.pairs_total;
+  j["wall_s"] = result.wall_s;
+  j["notes"] = result.notes;
+  json summary = json::array();
+  for (const auto& s : Summarize(result.records, thr)) {
+    summary.push_back({{"case", s.case_name},
+                       {"detector", ToString(s.detector)},
+                       {"method", ToString(s.method)},
+                       {"pairs", s.pairs},
+                       {"keypoints", s.keypoints},
+                       {"read_ms", StatsJson(s.read_ms)},
+                       {"extract_ms", StatsJson(s.extract_ms)},
+                       {"predict_ms", StatsJson(s.predict_ms)},
+                       {"match_ms", StatsJson(s.match_ms)},
+                       {"total_ms", StatsJson(s.total_ms)},
+                       {"matches", s.matches},
+                       {"correct", s.correct},
+                       {"false", s.wrong},
+                       {"possible", s.possible},
+                       {"precision", s.precision},
+                       {"recall", s.recall},
+                       {"epipolar_fraction", s.epipolar_fraction}});
+  }
+  j["summary"] = summary;
+  json pairs = json::array();
+  for (const auto& r : result.records) {
+    for (const auto& run : r.runs) {
+      const RunCounts c = CountRun(r, run, thr);
+      pairs.push_back({{"case", r.case_name},
+                       {"pair", r.pair_index},
+                       {"frame_a", r.frame_a},
+                       {"frame_b", r.frame_b},
+                       {"t_a_ns", r.t_a_ns},
+                       {"t_b_ns", r.t_b_ns},
+                       {"detector", ToString(r.detector)},
+                       {"method", ToString(run.method)},
+                       {"keypoints_a", r.keypoints_a},
+                       {"keypoints_b", r.keypoints_b},
+                       {"extract_ms", r.extract_ms},
+                       {"motion_ms", UsesPrediction(run.method) ? r.motion_ms : 0.0},
+                       {"predict_ms", run.predict_ms},
+                       {"match_ms", run.match_ms},
+                       {"matches", c.counts.matches},
+                       {"correct", c.counts.correct},
+                       {"false", c.counts.wrong},
+                       {"possible", c.possible},
+                       {"precision", c.precision},
+                       {"recall", c.recall}});
+    }
+  }
+  j["pairs"] = pairs;
+  json skipped = json::array();
+  for (const auto& s : result.skipped) {
+    skipped.push_back({{"case", s.case_name},
+                       {"pair", s.pair_index},
+                       {"frame_a", s.frame_a},
+                       {"frame_b", s.frame_b},
+                       {"detector", s.detector},
+                       {"reason", s.reason}});
+  }
+  j["skipped"] = skipped;
+  json precision_at = json::array();
+  for (double th : context.fixed_thresholds) {
+    for (const auto& s : Summarize(result.records, th)) {
+      precision_at.push_back({{"threshold_px", th},
+                              {"case", s.case_name},
+                              {"detector", ToString(s.detector)},
+                              {"method", ToString(s.method)},
+                              {"precision", s.precision},
+                              {"recall", s.recall}});
+    }
+  }
+  j["precision_at"] = precision_at;
+  if (context.end_to_end && context.end_to_end->frames > 0) {
+    const EndToEndTiming& e = *context.end_to_end;
+    j["end_to_end"] = {{"frames", e.frames},
+                       {"width", e.width},
+                       {"height", e.height},
+                       {"sequential_ms_per_frame", e.sequential_ms_per_frame},
+                       {"pipelined_ms_per_frame", e.pipelined_ms_per_frame},
+                       {"sequential_matches", e.sequential_matches},
+                       {"pipelined_matches", e.pipelined_matches},
+                       {"motion_failures", e.motion_failures}};
+  } else {
+    j["end_to_end"] = nullptr;
+  }
+  return j;
+}
+
+std::vector<std::string> WriteReportFiles(const std::string& dir, const EvaluationResult& result,
+                                          const ReportContext& context) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw Error("cannot create output folder " + dir + ": " + ec.message());
+  std::vector<std::string> written;
+  auto write = [&](const std::string& name, const auto& fill) {
+    const std::string path = (std::filesystem::path(dir) / name).string();
+    std::ofstream out(path);
+    if (!out) throw Error("cannot write " + path);
+    fill(out);
+    out.close();
+    if (!out) throw Error("error while writing " + path);
+    written.push_back(path);
+  };
+  const double thr = context.threshold.threshold_px;
+  write("report.md", [&](std::ostream& o) { o << MarkdownReport(result, context, 1000); });
+  write("report.json",
+        [&](std::ostream& o) { o << ReportToJson(result, context).dump(2) << "\n"; });
+  write("summary.csv",
+        [&](std::ostream& o) { WriteSummaryCsv(o, Summarize(result.records, thr)); });
+  write("pairs.csv", [&](std::ostream& o) { WritePairsCsv(o, result.records, thr); });
+  write("skipped.csv", [&](std::ostream& o) { WriteSkippedCsv(o, result.skipped); });
+  return written;
+}
+
+}  // namespace imumatch
