@@ -57,10 +57,52 @@ class GridIndex {
     for (int h = 0; h < count; ++h) f(index_[hits[h]], xy_[2 * hits[h]], xy_[2 * hits[h] + 1]);
   }
 
+  // Replaces *out with the indices of the points inside the closed box (in grid order). The
+  // buffer's capacity is reused across calls; the box test is branch-free.
+  void CollectInBox(float min_x, float min_y, float max_x, float max_y,
+                    std::vector<int>* out) const {
+    Collect<true>(min_x, min_y, max_x, max_y, out);
+  }
+  // The same, but returns slots: positions in the grid's cell-sorted order (slot_index(slot) is the
+  // point's original index). Data copied into slot order is read contiguously by window queries.
+  void CollectSlotsInBox(float min_x, float min_y, float max_x, float max_y,
+                         std::vector<int>* out) const {
+    Collect<false>(min_x, min_y, max_x, max_y, out);
+  }
+  int slot_index(int slot) const { return index_[slot]; }
+  // Row-major cell id of a position (clamped into the grid).
+  int CellOf(float x, float y) const { return CellRow(y) * cols_ + CellCol(x); }
+  int num_cells() const { return cols_ * rows_; }
+
   // Convenience for tests and tools: the indices inside the box, ascending.
   std::vector<int> QueryBox(float min_x, float min_y, float max_x, float max_y) const;
 
  private:
+  template <bool kOriginalIndex>
+  void Collect(float min_x, float min_y, float max_x, float max_y, std::vector<int>* out) const {
+    out->clear();
+    if (index_.empty() || !(min_x <= max_x) || !(min_y <= max_y)) return;
+    const int c0 = CellCol(min_x), c1 = CellCol(max_x);
+    const int r0 = CellRow(min_y), r1 = CellRow(max_y);
+    size_t scanned = 0;
+    for (int r = r0; r <= r1; ++r) {
+      scanned += cell_start_[r * cols_ + c1 + 1] - cell_start_[r * cols_ + c0];
+    }
+    out->resize(scanned);
+    int* dst = out->data();
+    size_t count = 0;
+    for (int r = r0; r <= r1; ++r) {
+      const int begin = cell_start_[r * cols_ + c0];
+      const int end = cell_start_[r * cols_ + c1 + 1];
+      for (int k = begin; k < end; ++k) {
+        const float x = xy_[2 * k], y = xy_[2 * k + 1];
+        dst[count] = kOriginalIndex ? index_[k] : k;
+        count += static_cast<size_t>((x >= min_x) & (x <= max_x) & (y >= min_y) & (y <= max_y));
+      }
+    }
+    out->resize(count);
+  }
+
   void BuildStrided(const unsigned char* xs, const unsigned char* ys, size_t stride, int n,
                     int width, int height, float cell_size);
   int CellCol(float x) const {

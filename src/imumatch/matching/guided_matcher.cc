@@ -1,6 +1,7 @@
 #include "imumatch/matching/guided_matcher.h"
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "imumatch/core/error.h"
@@ -72,13 +73,26 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
   const float scale_tol = static_cast<float>(options.scale_tolerance_factor);
   const float inf = std::numeric_limits<float>::infinity();
 
-  std::vector<float> reverse_cost;
+  // B's keypoints and descriptors copied into the grid's cell order: a window's candidates are then
+  // read from a few contiguous runs instead of scattered rows (O(m) copy, a few us per 1000).
+  std::vector<KeypointInfo> info_b(m);
+  std::vector<uint8_t> desc_b(static_cast<size_t>(m) * bytes);
+  for (int k = 0; k < m; ++k) {
+    const int j = grid_b.slot_index(k);
+    info_b[k] = keypoints_b[j];
+    std::memcpy(desc_b.data() + static_cast<size_t>(k) * bytes, descriptors_b.Row(j), bytes);
+  }
+  const bool mutual = options.mutual;
+  std::vector<float> reverse_cost;  // by slot
   std::vector<int> reverse_idx;
-  if (options.mutual) {
+  if (mutual) {
     reverse_cost.assign(m, inf);
     reverse_idx.assign(m, -1);
   }
-  result.matches.reserve(n / 2);
+  std::vector<int> best_slot(n, -1);  // accepted (before the mutual check) matches, by query
+  std::vector<float> best_cost(n), second_cost(n);
+  std::vector<int> candidates;
+  candidates.reserve(256);
 
   for (int i = 0; i < n; ++i) {
     const KeypointPrediction& p = predictions[i];
@@ -111,34 +125,35 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
 
     bool any_in_window = false, any_angle_ok = false;
     float best = inf, second = inf;
-    int best_j = -1;
+    int best_k = -1;
     int64_t evaluated = 0;
-    grid_b.ForEachInBox(p.min_x, p.min_y, p.max_x, p.max_y, [&](int j, float x, float y) {
-      if (capsule && p.SegmentDistanceSquared(x, y) > r2) return;
+    grid_b.CollectSlotsInBox(p.min_x, p.min_y, p.max_x, p.max_y, &candidates);
+    for (const int k : candidates) {
+      const KeypointInfo& kb = info_b[k];
+      if (capsule && p.SegmentDistanceSquared(kb.x, kb.y) > r2) continue;
       any_in_window = true;
-      const KeypointInfo& kb = keypoints_b[j];
       if (check_angle && kb.angle_deg >= 0.0f &&
           std::fabs(WrapDegrees(kb.angle_deg - expected_angle)) > orient_tol) {
-        return;
+        continue;
       }
       any_angle_ok = true;
-      if (check_size && kb.size > 0.0f && (kb.size < size_lo || kb.size > size_hi)) return;
-      const float c = cost_fn(da, descriptors_b.Row(j), bytes);
+      if (check_size && kb.size > 0.0f && (kb.size < size_lo || kb.size > size_hi)) continue;
+      const float c = cost_fn(da, desc_b.data() + static_cast<size_t>(k) * bytes, bytes);
       ++evaluated;
       if (c < second) {
         if (c < best) {
           second = best;
           best = c;
-          best_j = j;
+          best_k = k;
         } else {
           second = c;
         }
       }
-      if (options.mutual && c < reverse_cost[j]) {
-        reverse_cost[j] = c;
-        reverse_idx[j] = i;
+      if (mutual && c < reverse_cost[k]) {
+        reverse_cost[k] = c;
+        reverse_idx[k] = i;
       }
-    });
+    }
     stats.distances_computed += evaluated;
     if (!any_in_window) {
       ++stats.no_candidate_in_window;
@@ -148,12 +163,13 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
       ++stats.orientation;
       continue;
     }
-    if (best_j < 0) {
+    if (best_k < 0) {
       ++stats.scale;
       continue;
     }
     if (l2) {
-      const float na = SquaredNorm(da, bytes), nb = SquaredNorm(descriptors_b.Row(best_j), bytes);
+      const float na = SquaredNorm(da, bytes);
+      const float nb = SquaredNorm(desc_b.data() + static_cast<size_t>(best_k) * bytes, bytes);
       if (best > max_l2_rel2 * 0.5f * (na + nb)) {
         ++stats.distance_threshold;
         continue;
@@ -166,25 +182,26 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
       ++stats.ratio_test;
       continue;
     }
-    Match match;
-    match.query_idx = i;
-    match.train_idx = best_j;
-    match.distance = CostToDistance(norm, best);
-    match.second_distance = second < inf ? CostToDistance(norm, second) : inf;
-    match.predicted_uv = p.uv;
-    result.matches.push_back(match);
+    best_slot[i] = best_k;
+    best_cost[i] = best;
+    second_cost[i] = second;
   }
 
-  if (options.mutual) {
-    size_t kept = 0;
-    for (const Match& match : result.matches) {
-      if (reverse_idx[match.train_idx] == match.query_idx) {
-        result.matches[kept++] = match;
-      } else {
-        ++stats.mutual;
-      }
+  // The mutual check uses the reverse bests gathered in the same pass.
+  for (int i = 0; i < n; ++i) {
+    const int k = best_slot[i];
+    if (k < 0) continue;
+    if (mutual && reverse_idx[k] != i) {
+      ++stats.mutual;
+      continue;
     }
-    result.matches.resize(kept);
+    Match match;
+    match.query_idx = i;
+    match.train_idx = grid_b.slot_index(k);
+    match.distance = CostToDistance(norm, best_cost[i]);
+    match.second_distance = second_cost[i] < inf ? CostToDistance(norm, second_cost[i]) : inf;
+    match.predicted_uv = predictions[i].uv;
+    result.matches.push_back(match);
   }
   stats.matched = static_cast<int>(result.matches.size());
   return result;
