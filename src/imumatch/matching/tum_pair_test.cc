@@ -156,6 +156,11 @@ TEST(TumPairTest, GuidedBeatsKnnRatioForOrb) {
   Print("guided (uncertainty window)", sg);
   Print("guided + mutual", Judge(guided_mutual.matches, f, camera));
   Print("guided, fixed +-10 px window", Judge(guided_fixed.matches, f, camera));
+  PredictionOptions octave;
+  octave.scale_sigma_with_octave = true;
+  octave.octave_scale = 1.2;  // ORB: octave = pyramid level
+  Print("guided, pixel sigma x 1.2^level",
+        Judge(Guided(f, camera, GuidedMatcherOptions(), octave).matches, f, camera));
   std::printf("  guided stats: %s\n", guided.stats.ToString().c_str());
   EXPECT_GT(sg.correct8, sk.correct8);
   EXPECT_GE(sg.Precision8(), sk.Precision8() - 1.0);
@@ -171,6 +176,15 @@ TEST(TumPairTest, GuidedBeatsKnnRatioForSift) {
   std::printf("SIFT %zu / %zu keypoints:\n", f.kps_a.size(), f.kps_b.size());
   Print("BFMatcher knnMatch(k=2) + ratio 0.8", sk);
   Print("guided (uncertainty window)", sg);
+  PredictionOptions octave;
+  octave.scale_sigma_with_octave = true;
+  octave.octave_scale = 2.0;  // SIFT: signed octave index in the low byte
+  Print("guided, pixel sigma x 2^octave",
+        Judge(Guided(f, camera, GuidedMatcherOptions(), octave).matches, f, camera));
+  GuidedMatcherOptions no_orientation;
+  no_orientation.check_orientation = false;
+  Print("guided, no orientation check",
+        Judge(Guided(f, camera, no_orientation).matches, f, camera));
   std::printf("  guided stats: %s\n", guided.stats.ToString().c_str());
   EXPECT_GT(sg.correct8, sk.correct8);
   EXPECT_GE(sg.Precision8(), sk.Precision8() - 1.0);
