@@ -158,16 +158,23 @@ Features ExtractFeatures(const cv::Mat& image, const FeatureOptions& options) {
   Features out;
   std::vector<cv::KeyPoint> keypoints;
   cv::Mat descriptors;
-  if (options.kind == DetectorKind::kAkaze || options.kind == DetectorKind::kBrisk) {
-    // No built-in cap: keep the strongest detections, then describe only those.
-    feature2d->detect(gray, keypoints);
-    std::stable_sort(keypoints.begin(), keypoints.end(), ResponseGreater);
-    if (static_cast<int>(keypoints.size()) > options.max_keypoints) {
-      keypoints.resize(options.max_keypoints);
+  try {
+    if (options.kind == DetectorKind::kAkaze || options.kind == DetectorKind::kBrisk) {
+      // No built-in cap: keep the strongest detections, then describe only those.
+      feature2d->detect(gray, keypoints);
+      std::stable_sort(keypoints.begin(), keypoints.end(), ResponseGreater);
+      if (static_cast<int>(keypoints.size()) > options.max_keypoints) {
+        keypoints.resize(options.max_keypoints);
+      }
+      feature2d->compute(gray, keypoints, descriptors);
+    } else {
+      feature2d->detectAndCompute(gray, cv::noArray(), keypoints, descriptors);
     }
-    feature2d->compute(gray, keypoints, descriptors);
-  } else {
-    feature2d->detectAndCompute(gray, cv::noArray(), keypoints, descriptors);
+  } catch (const cv::Exception& e) {
+    // OpenCV's detectors assert on some inputs (e.g. images smaller than their pyramid needs).
+    throw InvalidArgument("ExtractFeatures: " + ToString(options.kind) + " failed on a " +
+                          std::to_string(gray.cols) + "x" + std::to_string(gray.rows) +
+                          " image: " + e.what());
   }
   if (keypoints.empty() || descriptors.rows != static_cast<int>(keypoints.size())) {
     if (!keypoints.empty()) {

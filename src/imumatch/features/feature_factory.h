@@ -60,7 +60,8 @@ struct Features {
 
 // Detects and describes features on an 8-bit gray, BGR or BGRA image. The result holds at most
 // options.max_keypoints features sorted by decreasing response, for every kind. Throws
-// InvalidArgument for an empty image, another pixel type or options failing Check().
+// InvalidArgument for an empty image, another pixel type, options failing Check(), or when an
+// OpenCV detector rejects the image (cv::Exception is translated, e.g. for tiny images).
 Features ExtractFeatures(const cv::Mat& image, const FeatureOptions& options);
 
 }  // namespace imumatch

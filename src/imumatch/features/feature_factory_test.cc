@@ -163,6 +163,32 @@ TEST(ExtractFeaturesTest, RejectsEmptyAndNon8BitImages) {
   EXPECT_THROW(ExtractFeatures(TumColorImage(), bad), InvalidArgument);
 }
 
+TEST(ExtractFeaturesTest, TinyImagesGiveNoFeaturesOrAnImumatchError) {
+  for (const DetectorKind kind : kAllKinds) {
+    for (const cv::Size size : {cv::Size(1, 1), cv::Size(7, 5), cv::Size(40, 30)}) {
+      SCOPED_TRACE(ToString(kind) + " " + std::to_string(size.width));
+      cv::Mat img(size, CV_8U);
+      cv::randu(img, 0, 255);
+      FeatureOptions options;
+      options.kind = kind;
+      if ((kind == DetectorKind::kSurf || kind == DetectorKind::kFastBrief) && size.width < 27) {
+        // Our own code: no features (neither the 27-pixel SURF filters nor the 57-pixel BRIEF
+        // patch fit), no error.
+        const Features f = ExtractFeatures(img, options);
+        EXPECT_TRUE(f.keypoints.empty());
+        EXPECT_EQ(f.descriptors.rows, 0);
+        continue;
+      }
+      try {
+        const Features f = ExtractFeatures(img, options);
+        EXPECT_EQ(f.descriptors.rows, static_cast<int>(f.keypoints.size()));
+      } catch (const InvalidArgument&) {
+        // acceptable: OpenCV's assertion translated into a clear imumatch error
+      }
+    }
+  }
+}
+
 TEST(ExtractFeaturesTest, FlatImageGivesNoFeatures) {
   for (const DetectorKind kind : kAllKinds) {
     SCOPED_TRACE(ToString(kind));
