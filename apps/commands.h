@@ -7,5 +7,7 @@ namespace imumatch::apps {
 // Each subcommand adds itself to the app; the callback runs the command and may throw any
 // imumatch::Error, which main() maps to an exit code.
 // (Declared here, defined in <name>_command.cc, called from main.cc.)
+void AddSynthCommand(CLI::App& app);  // synth_command.cc
+void AddImuCommand(CLI::App& app);    // imu_command.cc
 
 }  // namespace imumatch::apps

@@ -17,6 +17,8 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("imumatch 0.1.0"));
   app.require_subcommand(1);
   // Subcommands register themselves here.
+  imumatch::apps::AddSynthCommand(app);
+  imumatch::apps::AddImuCommand(app);
 
   try {
     app.parse(argc, argv);

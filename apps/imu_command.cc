@@ -1,0 +1,126 @@
+// imumatch imu: IMU demo on a recorded (EuRoC) or simulated (TUM, synthetic) IMU log. Initialises
+// the gyro bias and gravity direction from the still start, then integrates over consecutive
+// camera frame intervals and prints the camera's delta rotation per interval (with and without
+// the bias removed) next to the ground truth when the dataset has it.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include "commands.h"
+#include "imumatch/core/error.h"
+#include "imumatch/core/so3.h"
+#include "imumatch/core/time.h"
+#include "imumatch/imu/camera_motion.h"
+#include "imumatch/imu/imu_integrator.h"
+#include "imumatch/io/dataset.h"
+
+namespace imumatch::apps {
+namespace {
+
+struct ImuArgs {
+  std::string path;
+  double still_s = 1.0;
+  size_t max_frames = 20;
+  std::string mode = "so3";
+};
+
+constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
+
+void RunImu(const ImuArgs& a) {
+  IMUMATCH_CHECK(a.still_s > 0.0, "--still must be > 0");
+  DatasetOptions options;
+  options.max_frames = a.max_frames;
+  const Dataset d = LoadDataset(a.path, options);
+  std::cout << "dataset " << d.name << " (" << ToString(d.kind) << "): " << d.frames.size()
+            << " frames, " << d.imu.size() << " IMU samples\n"
+            << d.imu_source_note << "\n";
+  if (d.imu.empty()) throw InvalidArgument("the dataset has no IMU data");
+  IMUMATCH_CHECK(d.frames.size() >= 2, "need at least two frames");
+
+  const int64_t t_still0 = d.imu.begin_ns();
+  const int64_t t_still1 = std::min(d.imu.end_ns(), t_still0 + SecondsToNs(a.still_s));
+  const StillInitialization init = InitializeFromStill(d.imu, t_still0, t_still1, d.imu_params);
+  std::printf(
+      "still start %.3f s (%d samples): gyro bias %+.5f %+.5f %+.5f rad/s (+- %.1e), "
+      "gravity in IMU %+.3f %+.3f %+.3f m/s^2\n",
+      NsToSeconds(t_still1 - t_still0), init.num_samples, init.bias.gyro.x(), init.bias.gyro.y(),
+      init.bias.gyro.z(), init.gyro_bias_sigma, init.gravity_in_imu.x(), init.gravity_in_imu.y(),
+      init.gravity_in_imu.z());
+
+  CameraMotionOptions motion_options;
+  motion_options.mode = ParseIntegrationMode(a.mode);
+  NavState nav;
+  nav.world_from_imu = init.world_from_imu;
+  std::printf("%5s %18s %7s %12s %12s %12s %10s\n", "pair", "t_a [s]", "dt[ms]", "rot[deg]",
+              "raw_rot[deg]", "gt_rot[deg]", "sigma[deg]");
+  bool nav_valid = false;
+  int printed = 0;
+  for (size_t i = 0; i + 1 < d.frames.size(); ++i) {
+    const int64_t ta = d.frames[i].t_ns, tb = d.frames[i + 1].t_ns;
+    if (ta < d.imu.begin_ns() || tb > d.imu.end_ns()) continue;
+    if (!nav_valid) {
+      // Propagate from the end of the still period (at rest) to the first frame.
+      nav.t_ns = t_still0;
+      if (ta > t_still0) {
+        const ImuPreintegration pim =
+            Preintegrate(d.imu.Slice(t_still0, ta), init.bias, d.imu_params);
+        nav = Propagate(nav, pim, d.imu_params.gravity_in_world);
+      }
+      if (d.frames[i].imu_velocity_in_world)
+        nav.velocity_in_world = *d.frames[i].imu_velocity_in_world;
+      nav_valid = true;
+    }
+    ImuStateAtFrame state;
+    state.world_from_imu = nav.world_from_imu;
+    state.velocity_in_world = nav.velocity_in_world;
+    state.bias = init.bias;
+    const CameraMotion m =
+        ComputeCameraMotion(d.imu, ta, tb, state, d.imu_params, d.cam_from_imu, motion_options);
+    ImuStateAtFrame raw_state = state;
+    raw_state.bias = ImuBias();
+    const CameraMotion raw =
+        ComputeCameraMotion(d.imu, ta, tb, raw_state, d.imu_params, d.cam_from_imu, motion_options);
+    char gt[32] = "-";
+    if (d.frames[i].world_from_cam && d.frames[i + 1].world_from_cam) {
+      const CameraMotion truth = CameraMotionFromPoses(ta, *d.frames[i].world_from_cam, tb,
+                                                       *d.frames[i + 1].world_from_cam);
+      std::snprintf(gt, sizeof(gt), "%.4f",
+                    RotationAngle(truth.cam_b_from_cam_a.rotation) * kRadToDeg);
+    }
+    const double sigma = std::sqrt(std::max(0.0, m.covariance.topLeftCorner<3, 3>().trace()));
+    std::printf("%5zu %18s %7.2f %12.4f %12.4f %12s %10.4f\n", i, FormatNsAsSeconds(ta).c_str(),
+                NsToSeconds(tb - ta) * 1e3, RotationAngle(m.cam_b_from_cam_a.rotation) * kRadToDeg,
+                RotationAngle(raw.cam_b_from_cam_a.rotation) * kRadToDeg, gt, sigma * kRadToDeg);
+    ++printed;
+    const ImuPreintegration pim = Preintegrate(d.imu.Slice(ta, tb), init.bias, d.imu_params);
+    nav = Propagate(nav, pim, d.imu_params.gravity_in_world);
+  }
+  if (printed == 0) throw InvalidArgument("no frame interval lies inside the IMU log");
+}
+
+}  // namespace
+
+void AddImuCommand(CLI::App& app) {
+  auto args = std::make_shared<ImuArgs>();
+  CLI::App* sub = app.add_subcommand(
+      "imu",
+      "IMU demo: initialise from the still start, integrate between consecutive camera frames and "
+      "print the camera's delta rotations (bias removed, raw, ground truth).");
+  auto* euroc = sub->add_option("--euroc", args->path, "EuRoC folder (holding mav0/, or mav0)");
+  auto* dataset = sub->add_option("--dataset", args->path,
+                                  "Any dataset folder (TUM RGB-D, EuRoC, imumatch synth)");
+  euroc->excludes(dataset);
+  sub->add_option("--still", args->still_s, "Length of the still start (s)")->capture_default_str();
+  sub->add_option("--frames", args->max_frames, "Number of frames to use (0 = all)")
+      ->capture_default_str();
+  sub->add_option("--mode", args->mode, "Integration mode: so3 or paper")->capture_default_str();
+  sub->callback([args] {
+    if (args->path.empty()) throw InvalidArgument("give --euroc DIR or --dataset DIR");
+    RunImu(*args);
+  });
+}
+
+}  // namespace imumatch::apps
