@@ -61,8 +61,9 @@ MatchResult MatchFramesGuided(const PinholeCamera& camera, const CameraMotion& m
                               const PredictionOptions& prediction_options,
                               const GuidedMatcherOptions& matcher_options);
 
-// Reusable per-frame state for a caller that matches many frames: keeps the buffers (predictions,
-// grid, keypoint copies) so steady-state matching does not reallocate them.
+// Reusable per-frame state for a caller that matches many frames: keeps the keypoint copies,
+// depths, predictions and the grid between calls so their buffers are reused (MatchGuided itself
+// still allocates its O(m) scratch arrays per call).
 class GuidedMatcherWorkspace {
  public:
   MatchResult Match(const PinholeCamera& camera, const CameraMotion& motion,
