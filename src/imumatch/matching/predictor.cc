@@ -105,6 +105,8 @@ KeypointPredictor::KeypointPredictor(const PinholeCamera& camera, const CameraMo
   IMUMATCH_CHECK(motion.covariance.allFinite(), "motion covariance is not finite");
   r_ = motion.cam_b_from_cam_a.RotationMatrix();
   t_ = motion.cam_b_from_cam_a.translation;
+  r_col0_fx_ = r_.col(0) / camera.fx;
+  r_col1_fy_ = r_.col(1) / camera.fy;
   IMUMATCH_CHECK(r_.allFinite() && t_.allFinite(), "motion is not finite");
   motion_cov_ = motion.covariance;
   has_motion_cov_ = !motion_cov_.isZero(0.0);
@@ -138,21 +140,27 @@ Eigen::Matrix2d KeypointPredictor::Covariance(const Eigen::Vector3d& rx, double 
                                               double rho_variance, double pixel_variance) const {
   const Eigen::Vector3d q = rx + rho * t_;
   const double iz = 1.0 / q.z();
-  Eigen::Matrix<double, 2, 3> jp;
-  jp << camera_.fx * iz, 0.0, -camera_.fx * q.x() * iz * iz, 0.0, camera_.fy * iz,
-      -camera_.fy * q.y() * iz * iz;
-  Eigen::Matrix3d cq = rho_variance * t_ * t_.transpose();
-  const Eigen::Vector3d c0 = r_.col(0) / camera_.fx, c1 = r_.col(1) / camera_.fy;
-  cq.noalias() += pixel_variance * (c0 * c0.transpose() + c1 * c1.transpose());
+  const double u = q.x() * iz, w = q.y() * iz;
+  // pi'(q) v, computed directly in 2-D (no 3x3 products for the common terms).
+  const auto dpi = [&](const Eigen::Vector3d& v) {
+    return Eigen::Vector2d(camera_.fx * (v.x() - u * v.z()) * iz,
+                           camera_.fy * (v.y() - w * v.z()) * iz);
+  };
+  const Eigen::Vector2d jt = dpi(t_);
+  const Eigen::Vector2d a0 = dpi(r_col0_fx_), a1 = dpi(r_col1_fy_);
+  Eigen::Matrix2d c = rho_variance * jt * jt.transpose();
+  c.noalias() += pixel_variance * (a0 * a0.transpose() + a1 * a1.transpose());
+  c(0, 0) += pixel_variance;
+  c(1, 1) += pixel_variance;
   if (has_motion_cov_) {
+    Eigen::Matrix<double, 2, 3> jp;
+    jp << camera_.fx * iz, 0.0, -camera_.fx * u * iz, 0.0, camera_.fy * iz, -camera_.fy * w * iz;
     Eigen::Matrix<double, 3, 6> jm;
     jm.leftCols<3>() = -Hat(rx);
     jm.rightCols<3>() = rho * Eigen::Matrix3d::Identity();
-    cq.noalias() += jm * motion_cov_ * jm.transpose();
+    const Eigen::Matrix<double, 2, 6> j = jp * jm;
+    c.noalias() += j * motion_cov_ * j.transpose();
   }
-  Eigen::Matrix2d c = jp * cq * jp.transpose();
-  c(0, 0) += pixel_variance;
-  c(1, 1) += pixel_variance;
   return c;
 }
 

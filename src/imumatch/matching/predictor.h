@@ -137,6 +137,7 @@ class KeypointPredictor {
   PredictionOptions options_;
   Eigen::Matrix3d r_;
   Eigen::Vector3d t_;
+  Eigen::Vector3d r_col0_fx_, r_col1_fy_;  // R e1 / fx, R e2 / fy: dq/du_a, dq/dv_a
   Eigen::Matrix<double, 6, 6> motion_cov_;
   bool has_motion_cov_ = false;
   double chi2_ = 9.21;
