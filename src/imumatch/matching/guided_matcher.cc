@@ -167,18 +167,19 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
       ++stats.scale;
       continue;
     }
+    // The acceptance threshold acts as a virtual second-best: a lone candidate (or one whose
+    // rival lies beyond the threshold) must still be distinctive by the ratio.
+    float max_cost = max_hamming;
     if (l2) {
       const float na = SquaredNorm(da, bytes);
       const float nb = SquaredNorm(desc_b.data() + static_cast<size_t>(best_k) * bytes, bytes);
-      if (best > max_l2_rel2 * 0.5f * (na + nb)) {
-        ++stats.distance_threshold;
-        continue;
-      }
-    } else if (best > max_hamming) {
+      max_cost = max_l2_rel2 * 0.5f * (na + nb);
+    }
+    if (best > max_cost) {
       ++stats.distance_threshold;
       continue;
     }
-    if (use_ratio && second < inf && !(best < ratio_cost * second)) {
+    if (use_ratio && !(best < ratio_cost * std::min(second, max_cost))) {
       ++stats.ratio_test;
       continue;
     }

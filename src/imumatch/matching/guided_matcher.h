@@ -14,14 +14,17 @@
 namespace imumatch {
 
 struct GuidedMatcherOptions {
-  // Lowe's ratio test on distances (not squared): best < ratio * second. 1 disables it. A lone
-  // candidate in the window always passes.
+  // Lowe's ratio test on distances (not squared): best < ratio * min(second, threshold). The
+  // distance threshold below acts as a virtual second-best, so a lone candidate in the window must
+  // still be distinctive: inside a small window the true second-best of the whole image is absent,
+  // and without this rule gross errors slip through on long (2 s) IMU intervals. 1 disables it.
   double ratio = 0.8;
   // Absolute thresholds on the best distance. Hamming: max_hamming_fraction of the descriptor's
-  // bits (0.25 -> 64 of 256 for ORB). L2: the distance relative to the descriptors' size,
+  // bits (0.35 -> 89.6 of 256 for ORB, near ORB-SLAM's TH_HIGH = 100 for guided search; with the
+  // ratio rule above a lone candidate needs < 71.7 bits). L2: the distance relative to the descriptors' size,
   // |a - b| <= max_l2_relative * sqrt((|a|^2 + |b|^2) / 2), so it works for unit descriptors and
   // for OpenCV's SIFT (norm ~512) alike.
-  double max_hamming_fraction = 0.25;
+  double max_hamming_fraction = 0.35;
   double max_l2_relative = 0.8;
   // Reverse pass: keep i -> j only when, among the keypoints of A whose windows contain j and pass
   // the consistency checks, i is the one closest to j.

@@ -261,13 +261,22 @@ TEST(GuidedMatcherTest, OrientationScaleAndMutualRejectionsAreCounted) {
 }
 
 TEST(GuidedMatcherTest, DistanceThresholdAndRatioTest) {
-  SyntheticPair s = MakePair(30, 0, kTrueMotion, Motion(kTrueMotion), 8, /*flipped_bits=*/70);
-  GuidedMatcherOptions mo;  // 64 bits of 256 allowed: 70 flipped bits are all rejected
+  SyntheticPair s = MakePair(30, 0, kTrueMotion, Motion(kTrueMotion), 8, /*flipped_bits=*/100);
+  GuidedMatcherOptions mo;  // 0.35 * 256 = 89.6 bits allowed: 100 flipped bits are all rejected
   Outcome o = RunMatch(s, PredictionOptions(), mo);
   EXPECT_EQ(o.result.stats.distance_threshold, 30);
   EXPECT_EQ(o.result.stats.matched, 0);
-  mo.max_hamming_fraction = 0.3;
+  mo.max_hamming_fraction = 0.5;  // 128 bits; 100 < 0.8 * 128 passes the ratio against it too
   EXPECT_EQ(RunMatch(s, PredictionOptions(), mo).correct, 30);
+  // The threshold is a virtual second-best: 80 bits pass the 89.6-bit threshold but are not
+  // distinctive against it (80 >= 0.8 * 89.6 = 71.7), so a lone candidate is rejected by ratio.
+  SyntheticPair lone = MakePair(30, 0, kTrueMotion, Motion(kTrueMotion), 8, /*flipped_bits=*/80);
+  o = RunMatch(lone, PredictionOptions(), GuidedMatcherOptions());
+  EXPECT_EQ(o.result.stats.ratio_test, 30);
+  EXPECT_EQ(o.result.stats.matched, 0);
+  // 70 bits are distinctive enough (70 < 71.7).
+  SyntheticPair close = MakePair(30, 0, kTrueMotion, Motion(kTrueMotion), 8, /*flipped_bits=*/70);
+  EXPECT_EQ(RunMatch(close, PredictionOptions(), GuidedMatcherOptions()).correct, 30);
   // Ratio: a second candidate next to keypoint 0's partner, with a descriptor as close -> rejected.
   SyntheticPair r = MakePair(30, 0, kTrueMotion, Motion(kTrueMotion), 8);
   r.kps_b.push_back(r.kps_b[r.partner[0]]);
