@@ -9,5 +9,7 @@ namespace imumatch::apps {
 // (Declared here, defined in <name>_command.cc, called from main.cc.)
 void AddSynthCommand(CLI::App& app);  // synth_command.cc
 void AddImuCommand(CLI::App& app);    // imu_command.cc
+void AddEvalCommand(CLI::App& app);   // eval_command.cc
+void AddDemoCommand(CLI::App& app);   // eval_command.cc
 
 }  // namespace imumatch::apps

@@ -19,6 +19,8 @@ int main(int argc, char** argv) {
   // Subcommands register themselves here.
   imumatch::apps::AddSynthCommand(app);
   imumatch::apps::AddImuCommand(app);
+  imumatch::apps::AddDemoCommand(app);
+  imumatch::apps::AddEvalCommand(app);
 
   try {
     app.parse(argc, argv);

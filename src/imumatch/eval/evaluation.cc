@@ -273,6 +273,16 @@ MethodRun RunMethod(MatchMethod method, const PinholeCamera& camera, const Camer
 
 // ---------------------------------------------------------------------------------------------
 
+cv::Mat PadBinaryDescriptors(const cv::Mat& descriptors) {
+  if (descriptors.empty() || descriptors.type() != CV_8UC1 || descriptors.cols % 8 == 0) {
+    return descriptors;
+  }
+  const int cols = (descriptors.cols + 7) / 8 * 8;
+  cv::Mat padded = cv::Mat::zeros(descriptors.rows, cols, CV_8UC1);
+  descriptors.copyTo(padded(cv::Rect(0, 0, descriptors.cols, descriptors.rows)));
+  return padded;
+}
+
 FrameReader MakeDiskFrameReader(const Dataset& dataset) {
   auto frames = std::make_shared<std::vector<FrameRecord>>(dataset.frames);
   return [frames](size_t index, bool with_depth) {
@@ -528,6 +538,7 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
         c.kind = kind;
         const auto t0 = Clock::now();
         c.features = ExtractFeatures(image, fopts);
+        c.features.descriptors = PadBinaryDescriptors(c.features.descriptors);
         c.ms = MsSince(t0);
         return c;
       };

@@ -10,6 +10,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "imumatch/core/time.h"
 #include "imumatch/eval/ground_truth.h"
 #include "imumatch/features/feature_factory.h"
 #include "imumatch/imu/camera_motion.h"
@@ -68,6 +69,11 @@ struct PairSelection {
   size_t max_pairs = 0;  // 0 = all
   void Check() const;
 };
+
+// Adapter: matching's DescriptorView needs binary descriptors whose row length is a multiple of 8
+// bytes, but AKAZE's MLDB has 61. Pads CV_8U rows with zero bytes up to the next multiple of 8
+// (Hamming distances are unchanged); other matrices are returned as they are.
+cv::Mat PadBinaryDescriptors(const cv::Mat& descriptors);
 
 // Throws InvalidArgument for explicit pairs outside the frame list or with a >= b.
 std::vector<FramePair> SelectFramePairs(const std::vector<FrameRecord>& frames,

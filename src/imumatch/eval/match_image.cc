@@ -83,7 +83,12 @@ cv::Mat DrawMatchImage(const PairVisual& visual, size_t run_index,
   // Search windows on frame B.
   cv::Mat right = canvas(cv::Rect(a.cols, header, b.cols, b.rows));
   int windows = 0;
-  for (const Match& m : run.matches) {
+  const size_t stride = options.max_windows > 0
+                            ? std::max<size_t>(1, (run.matches.size() + options.max_windows - 1) /
+                                                      options.max_windows)
+                            : run.matches.size() + 1;
+  for (size_t k = 0; k < run.matches.size(); k += stride) {
+    const Match& m = run.matches[k];
     if (windows >= options.max_windows) break;
     if (m.query_idx < 0 || static_cast<size_t>(m.query_idx) >= run.predictions.size()) continue;
     const KeypointPrediction& p = run.predictions[m.query_idx];
@@ -98,12 +103,12 @@ cv::Mat DrawMatchImage(const PairVisual& visual, size_t run_index,
       Eigen::SelfAdjointEigenSolver<Eigen::Matrix2f> es(p.covariance);
       const Eigen::Vector2f ev = es.eigenvalues().cwiseMax(0.0f);
       const Eigen::Vector2f major = es.eigenvectors().col(1);
-      const float k = std::sqrt(9.21f);  // 99% gate, 2 dof
+      const float gate = std::sqrt(9.21f);  // 99% gate, 2 dof
       const float angle = std::atan2(major.y(), major.x()) * 180.0f / static_cast<float>(M_PI);
       cv::ellipse(
           right,
           cv::RotatedRect(cv::Point2f(p.uv.x(), p.uv.y()),
-                          cv::Size2f(2 * k * std::sqrt(ev(1)), 2 * k * std::sqrt(ev(0))), angle),
+                          cv::Size2f(2 * gate * std::sqrt(ev(1)), 2 * gate * std::sqrt(ev(0))), angle),
           kEllipse, 1, cv::LINE_AA);
     }
   }

@@ -13,9 +13,9 @@ struct MatchImageOptions {
   // Correct matches (residual <= threshold): solid green lines; false ones: dashed red lines.
   double threshold_px = 1.5;
   // Search windows of the guided methods drawn on frame B for the matched keypoints (at most this
-  // many, the first matches): the search box as a rectangle, the 99% uncertainty ellipse of the
-  // prediction, and for keypoints without depth the epipolar segment.
-  int max_windows = 150;
+  // many, spread evenly over the matches): the search box as a rectangle, the 99% uncertainty
+  // ellipse of the prediction, and for keypoints without depth the epipolar segment.
+  int max_windows = 40;
   bool draw_unmatched_keypoints = true;
   void Check() const;
 };

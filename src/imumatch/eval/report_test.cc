@@ -4,9 +4,12 @@
 #include <fstream>
 #include <sstream>
 
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "imumatch/core/error.h"
 #include "imumatch/eval/plots.h"
 
 namespace imumatch {
@@ -126,7 +129,8 @@ TEST(ReportTest, CsvQuotesAndCounts) {
   EXPECT_EQ(CsvField("plain"), "plain");
   std::ostringstream skipped;
   WriteSkippedCsv(skipped, HandMadeResult().skipped);
-  EXPECT_NE(skipped.str().find("\"IMU interval not available: gap\""), std::string::npos)
+  EXPECT_NE(skipped.str().find("\"front,1m\",2,2,3,,IMU interval not available: gap\n"),
+            std::string::npos)
       << skipped.str();
 }
 
