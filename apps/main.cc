@@ -25,7 +25,9 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help and --version are "errors" with code 0; everything else is a usage error (2).
+    const int code = app.exit(e);
+    return code == 0 ? 0 : 2;
   } catch (const imumatch::InputError& e) {
     std::cerr << "error: " << e.what() << "\n";
     return 3;

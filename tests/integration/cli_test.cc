@@ -1,0 +1,146 @@
+// The imumatch command-line tool end to end, as a user runs it: `imumatch synth` writes a short
+// synthetic sequence, `imumatch eval` reads it back (and the real TUM fr1_xyz pair) and its
+// report.json is checked against the ground truth; bad inputs map to clear errors and exit codes.
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "imumatch/testing/test_data.h"
+
+namespace imumatch {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr
+};
+
+CommandResult RunCli(const std::string& args) {
+  const std::string command = std::string(IMUMATCH_CLI) + " " + args + " 2>&1";
+  CommandResult r;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) return r;
+  char buffer[4096];
+  size_t n = 0;
+  while ((n = fread(buffer, 1, sizeof(buffer), pipe)) > 0) r.output.append(buffer, n);
+  const int status = pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+class CliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("imumatch_cli_test_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+
+  fs::path dir_;
+};
+
+nlohmann::json ReadJson(const std::string& path) {
+  std::ifstream in(path);
+  EXPECT_TRUE(in.good()) << path;
+  return nlohmann::json::parse(in);
+}
+
+const nlohmann::json* SummaryRow(const nlohmann::json& report, const std::string& detector,
+                                 const std::string& method) {
+  for (const auto& row : report["summary"]) {
+    if (row["detector"] == detector && row["method"] == method) return &row;
+  }
+  ADD_FAILURE() << "no summary row " << detector << " " << method;
+  return nullptr;
+}
+
+TEST_F(CliTest, SynthThenEvalOnTheWrittenSequence) {
+  const CommandResult synth =
+      RunCli("synth --motion walk --width 320 --duration 0.2 --still 0.05 --out " + Path("seq"));
+  ASSERT_EQ(synth.exit_code, 0) << synth.output;
+  ASSERT_TRUE(fs::exists(Path("seq/rgb.txt"))) << synth.output;
+  const CommandResult eval = RunCli("eval " + Path("seq") +
+                                 " --detectors orb,sift --methods bf,guided --max-keypoints 400"
+                                 " --max-pairs 4 --e2e-frames 0 --images 1 --out " +
+                                 Path("out"));
+  ASSERT_EQ(eval.exit_code, 0) << eval.output;
+  EXPECT_NE(eval.output.find("Table I"), std::string::npos) << eval.output;
+  EXPECT_NE(eval.output.find("Table II"), std::string::npos) << eval.output;
+  const nlohmann::json report = ReadJson(Path("out/report.json"));
+  // Exact synthetic ground truth: the fixed 1.5 px threshold, not an automatic one.
+  EXPECT_DOUBLE_EQ(report["threshold"]["threshold_px"].get<double>(), 1.5) << report["threshold"];
+  EXPECT_TRUE(report["skipped"].empty()) << report["skipped"];
+  for (const std::string detector : {"orb", "sift"}) {
+    SCOPED_TRACE(detector);
+    const nlohmann::json* guided = SummaryRow(report, detector, "guided");
+    const nlohmann::json* bf = SummaryRow(report, detector, "bf");
+    ASSERT_TRUE(guided != nullptr && bf != nullptr);
+    EXPECT_EQ((*guided)["pairs"].get<int>(), 4);
+    EXPECT_GT((*guided)["matches"].get<double>(), 50.0);
+    EXPECT_GE((*guided)["correct"].get<double>(), (*bf)["correct"].get<double>());
+    EXPECT_GE((*guided)["precision"].get<double>(), detector == "sift" ? 0.98 : 0.85);
+  }
+  EXPECT_TRUE(fs::exists(Path("out/summary.csv")));
+  EXPECT_TRUE(fs::exists(Path("out/report.md")));
+}
+
+TEST_F(CliTest, EvalOnTheRealTumPairPrintsItsAutomaticThreshold) {
+  const std::string tum = testing::DataPath("tum_fr1_xyz_pair");
+  const CommandResult eval = RunCli("eval " + tum +
+                                 " --detectors orb --methods bf,guided --e2e-frames 0 --out " +
+                                 Path("tum"));
+  ASSERT_EQ(eval.exit_code, 0) << eval.output;
+  const nlohmann::json report = ReadJson(Path("tum/report.json"));
+  const double threshold = report["threshold"]["threshold_px"].get<double>();
+  EXPECT_GE(threshold, 2.0);
+  EXPECT_LE(threshold, 10.0);
+  const nlohmann::json* guided = SummaryRow(report, "orb", "guided");
+  const nlohmann::json* bf = SummaryRow(report, "orb", "bf");
+  ASSERT_TRUE(guided != nullptr && bf != nullptr);
+  EXPECT_GE((*guided)["correct"].get<double>(), (*bf)["correct"].get<double>());
+  EXPECT_GT((*guided)["precision"].get<double>(), 0.95);
+}
+
+TEST_F(CliTest, BadInputsGiveClearErrorsAndExitCodes) {
+  // A missing dataset folder: input error (3), naming the path.
+  CommandResult r = RunCli("eval " + Path("does-not-exist") + " --out " + Path("o1"));
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  EXPECT_NE(r.output.find("does-not-exist"), std::string::npos) << r.output;
+  // A pose-pair folder with a malformed pose line: input error naming file and line.
+  const std::string pair = testing::DataPath("tum_fr1_xyz_pair");
+  fs::create_directories(Path("bad"));
+  for (const char* f : {"img_prev.png", "img_curr.png", "dep_prev.png", "dep_curr.png",
+                        "pose_prev.txt"}) {
+    fs::copy_file(pair + "/" + f, Path(std::string("bad/") + f));
+  }
+  std::ofstream(Path("bad/pose_curr.txt")) << "1.0 2.0 nan-ish 0 0 0 1\n";
+  r = RunCli("eval " + Path("bad") + " --out " + Path("o2"));
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  EXPECT_NE(r.output.find("pose_curr.txt:1"), std::string::npos) << r.output;
+  // An unknown motion or detector: invalid argument (4).
+  r = RunCli("synth --motion sideways --out " + Path("o3"));
+  EXPECT_EQ(r.exit_code, 4) << r.output;
+  EXPECT_NE(r.output.find("sideways"), std::string::npos) << r.output;
+  r = RunCli("eval " + pair + " --detectors orb,harris --out " + Path("o4"));
+  EXPECT_EQ(r.exit_code, 4) << r.output;
+  EXPECT_NE(r.output.find("harris"), std::string::npos) << r.output;
+  // Usage errors (2).
+  r = RunCli("eval");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+}
+
+}  // namespace
+}  // namespace imumatch
