@@ -73,9 +73,9 @@ TEST_F(CliTest, SynthThenEvalOnTheWrittenSequence) {
   ASSERT_EQ(synth.exit_code, 0) << synth.output;
   ASSERT_TRUE(fs::exists(Path("seq/rgb.txt"))) << synth.output;
   const CommandResult eval = RunCli("eval " + Path("seq") +
-                                 " --detectors orb,sift --methods bf,guided --max-keypoints 400"
-                                 " --max-pairs 4 --e2e-frames 0 --images 1 --out " +
-                                 Path("out"));
+                                    " --detectors orb,sift --methods bf,guided --max-keypoints 400"
+                                    " --max-pairs 4 --e2e-frames 0 --images 1 --out " +
+                                    Path("out"));
   ASSERT_EQ(eval.exit_code, 0) << eval.output;
   EXPECT_NE(eval.output.find("Table I"), std::string::npos) << eval.output;
   EXPECT_NE(eval.output.find("Table II"), std::string::npos) << eval.output;
@@ -99,9 +99,8 @@ TEST_F(CliTest, SynthThenEvalOnTheWrittenSequence) {
 
 TEST_F(CliTest, EvalOnTheRealTumPairPrintsItsAutomaticThreshold) {
   const std::string tum = testing::DataPath("tum_fr1_xyz_pair");
-  const CommandResult eval = RunCli("eval " + tum +
-                                 " --detectors orb --methods bf,guided --e2e-frames 0 --out " +
-                                 Path("tum"));
+  const CommandResult eval = RunCli(
+      "eval " + tum + " --detectors orb --methods bf,guided --e2e-frames 0 --out " + Path("tum"));
   ASSERT_EQ(eval.exit_code, 0) << eval.output;
   const nlohmann::json report = ReadJson(Path("tum/report.json"));
   const double threshold = report["threshold"]["threshold_px"].get<double>();
@@ -122,8 +121,8 @@ TEST_F(CliTest, BadInputsGiveClearErrorsAndExitCodes) {
   // A pose-pair folder with a malformed pose line: input error naming file and line.
   const std::string pair = testing::DataPath("tum_fr1_xyz_pair");
   fs::create_directories(Path("bad"));
-  for (const char* f : {"img_prev.png", "img_curr.png", "dep_prev.png", "dep_curr.png",
-                        "pose_prev.txt"}) {
+  for (const char* f :
+       {"img_prev.png", "img_curr.png", "dep_prev.png", "dep_curr.png", "pose_prev.txt"}) {
     fs::copy_file(pair + "/" + f, Path(std::string("bad/") + f));
   }
   std::ofstream(Path("bad/pose_curr.txt")) << "1.0 2.0 nan-ish 0 0 0 1\n";

@@ -80,10 +80,11 @@ const SyntheticRun& Synthetic() {
         for (const auto& mr : rec.runs) {
           const auto& st = mr.stats;
           std::cout << rec.case_name << " " << ToString(rec.detector) << " " << ToString(mr.method)
-                    << " q" << st.queries << " behind" << st.behind_camera << " out" << st.outside_image
-                    << " nocand" << st.no_candidate_in_window << " orient" << st.orientation
-                    << " scale" << st.scale << " dist" << st.distance_threshold << " ratio"
-                    << st.ratio_test << " mutual" << st.mutual << " matched" << st.matched << "\n";
+                    << " q" << st.queries << " behind" << st.behind_camera << " out"
+                    << st.outside_image << " nocand" << st.no_candidate_in_window << " orient"
+                    << st.orientation << " scale" << st.scale << " dist" << st.distance_threshold
+                    << " ratio" << st.ratio_test << " mutual" << st.mutual << " matched"
+                    << st.matched << "\n";
         }
       }
     }

@@ -105,11 +105,11 @@ cv::Mat DrawMatchImage(const PairVisual& visual, size_t run_index,
       const Eigen::Vector2f major = es.eigenvectors().col(1);
       const float gate = std::sqrt(9.21f);  // 99% gate, 2 dof
       const float angle = std::atan2(major.y(), major.x()) * 180.0f / static_cast<float>(M_PI);
-      cv::ellipse(
-          right,
-          cv::RotatedRect(cv::Point2f(p.uv.x(), p.uv.y()),
-                          cv::Size2f(2 * gate * std::sqrt(ev(1)), 2 * gate * std::sqrt(ev(0))), angle),
-          kEllipse, 1, cv::LINE_AA);
+      cv::ellipse(right,
+                  cv::RotatedRect(
+                      cv::Point2f(p.uv.x(), p.uv.y()),
+                      cv::Size2f(2 * gate * std::sqrt(ev(1)), 2 * gate * std::sqrt(ev(0))), angle),
+                  kEllipse, 1, cv::LINE_AA);
     }
   }
   int correct = 0;

@@ -21,9 +21,9 @@ struct GuidedMatcherOptions {
   double ratio = 0.8;
   // Absolute thresholds on the best distance. Hamming: max_hamming_fraction of the descriptor's
   // bits (0.35 -> 89.6 of 256 for ORB, near ORB-SLAM's TH_HIGH = 100 for guided search; with the
-  // ratio rule above a lone candidate needs < 71.7 bits). L2: the distance relative to the descriptors' size,
-  // |a - b| <= max_l2_relative * sqrt((|a|^2 + |b|^2) / 2), so it works for unit descriptors and
-  // for OpenCV's SIFT (norm ~512) alike.
+  // ratio rule above a lone candidate needs < 71.7 bits). L2: the distance relative to the
+  // descriptors' size, |a - b| <= max_l2_relative * sqrt((|a|^2 + |b|^2) / 2), so it works for unit
+  // descriptors and for OpenCV's SIFT (norm ~512) alike.
   double max_hamming_fraction = 0.35;
   double max_l2_relative = 0.8;
   // Reverse pass: keep i -> j only when, among the keypoints of A whose windows contain j and pass
