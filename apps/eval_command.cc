@@ -190,6 +190,13 @@ void RunEval(const std::string& path, CommonArgs a, double interval_s, int step,
                                          ? "interval " + std::to_string(interval_s) + " s"
                                          : "step " + std::to_string(step) + " frame(s)"});
   Finish(result, context, a, o);
+  if (result.records.empty()) {
+    throw InputError(
+        path, "no frame pair could be evaluated (" + std::to_string(result.skipped.size()) +
+                  " skipped; first: " +
+                  (result.skipped.empty() ? std::string("none") : result.skipped.front().reason) +
+                  ")");
+  }
 }
 
 void RunDemo(CommonArgs a, int intermediate) {

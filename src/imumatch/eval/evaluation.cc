@@ -285,11 +285,17 @@ cv::Mat PadBinaryDescriptors(const cv::Mat& descriptors) {
 
 FrameReader MakeDiskFrameReader(const Dataset& dataset) {
   auto frames = std::make_shared<std::vector<FrameRecord>>(dataset.frames);
-  return [frames](size_t index, bool with_depth) {
+  const int width = dataset.camera.width, height = dataset.camera.height;
+  return [frames, width, height](size_t index, bool with_depth) {
     IMUMATCH_CHECK(index < frames->size(), "frame index " << index);
     const FrameRecord& f = (*frames)[index];
     FrameImages out;
     out.image = LoadImage(f.image_path, ImageColor::kGray);
+    if (width > 0 && height > 0 && (out.image.cols != width || out.image.rows != height)) {
+      throw InputError(f.image_path, "image is " + std::to_string(out.image.cols) + "x" +
+                                         std::to_string(out.image.rows) + ", the camera is " +
+                                         std::to_string(width) + "x" + std::to_string(height));
+    }
     if (with_depth && !f.depth_path.empty()) out.depth = LoadDepth(f.depth_path, out.image.size());
     return out;
   };

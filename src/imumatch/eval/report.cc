@@ -111,7 +111,7 @@ std::string MarkdownDetailTable(const std::vector<MethodSummary>& summaries) {
         << Fixed(s.match_ms.p90, 2) << " / " << Fixed(s.match_ms.p99, 2) << " | "
         << Fixed(s.total_ms.mean, 1) << " | " << Fixed(s.matches, 1) << " | " << Fixed(s.correct, 1)
         << " | " << Fixed(s.wrong, 1) << " | " << Fixed(s.precision, 3) << " | "
-        << Fixed(s.recall, 3) << " |\n";
+        << (s.possible > 0.0 ? Fixed(s.recall, 3) : std::string("n/a (no depth)")) << " |\n";
   }
   return out.str();
 }
