@@ -61,21 +61,14 @@ void RunSynth(const SynthArgs& a) {
   options.t0_ns = SecondsToNs(a.t0_s);
   // Kinect-like camera scaled to the requested width (4:3).
   IMUMATCH_CHECK(a.width >= 16 && a.width <= 4096, "--width must be in [16, 4096]");
-  PinholeCamera camera = PinholeCamera::KinectDefault();
-  const double s = a.width / 640.0;
-  camera.width = a.width;
-  camera.height = a.width * 3 / 4;
-  camera.fx = camera.fy = 525.0 * s;
-  camera.cx = (camera.width - 1) / 2.0;
-  camera.cy = (camera.height - 1) / 2.0;
-  options.camera = camera;
+  options.camera = PinholeCamera::KinectDefault().ScaledToWidth(a.width);
   SceneOptions scene_options;
   scene_options.texel_size_m = a.texel_m;
   options.Check();
 
-  std::cout << "rendering '" << a.motion << "' at " << a.fps << " fps, " << camera.width << "x"
-            << camera.height << ", IMU model " << a.imu << ", seed " << a.seed << " ..."
-            << std::endl;
+  std::cout << "rendering '" << a.motion << "' at " << a.fps << " fps, " << options.camera.width
+            << "x" << options.camera.height << ", IMU model " << a.imu << ", seed " << a.seed
+            << " ..." << std::endl;
   const Scene scene(scene_options);
   const SyntheticSequence sequence = MakeSyntheticSequence(options, scene);
   SyntheticWriteOptions write_options;

@@ -104,6 +104,20 @@ PinholeCamera PinholeCamera::TumFreiburg1() {
   return c;
 }
 
+PinholeCamera PinholeCamera::ScaledToWidth(int new_width) const {
+  IMUMATCH_CHECK(new_width >= 1 && width >= 1,
+                 "cannot scale a " << width << " px wide camera to " << new_width << " px");
+  const double s = static_cast<double>(new_width) / width;
+  PinholeCamera c = *this;
+  c.width = new_width;
+  c.height = static_cast<int>(std::lround(height * s));
+  c.fx = fx * s;
+  c.fy = fy * s;
+  c.cx = (cx + 0.5) * s - 0.5;
+  c.cy = (cy + 0.5) * s - 0.5;
+  return c;
+}
+
 std::string PinholeCamera::ToString() const {
   std::ostringstream out;
   out << width << "x" << height << " fx=" << fx << " fy=" << fy << " cx=" << cx << " cy=" << cy;

@@ -53,6 +53,12 @@ struct PinholeCamera {
   static PinholeCamera KinectDefault();
   static PinholeCamera TumFreiburg1();
 
+  // The same camera for an image resized to width x (height * width / this->width), rounded:
+  // focal lengths scale by s = new_width / width and the principal point keeps its place under the
+  // pixel-centre convention, cx' = (cx + 0.5) s - 0.5. Distortion (on normalised coordinates) and
+  // depth scale are unchanged. Throws InvalidArgument for new_width < 1.
+  PinholeCamera ScaledToWidth(int new_width) const;
+
   std::string ToString() const;
 };
 

@@ -1,5 +1,6 @@
 #include "imumatch/camera/pinhole_camera.h"
 
+#include <array>
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -57,6 +58,29 @@ TEST(PinholeCamera, PixelCentreConvention) {
   EXPECT_TRUE(cam.IsInside(Eigen::Vector2d(3.49, 2.49)));
   EXPECT_FALSE(cam.IsInside(Eigen::Vector2d(3.5, 1)));
   EXPECT_FALSE(cam.IsInside(Eigen::Vector2d(1, 1), 1.6));
+}
+
+TEST(PinholeCamera, ScaledToWidthKeepsTheImageEdges) {
+  const PinholeCamera big = PinholeCamera::TumFreiburg1();
+  const PinholeCamera half = PinholeCamera::KinectDefault().ScaledToWidth(320);
+  // Hand values: Kinect 640x480 (525, 319.5, 239.5) halved.
+  EXPECT_EQ(half.width, 320);
+  EXPECT_EQ(half.height, 240);
+  EXPECT_DOUBLE_EQ(half.fx, 262.5);
+  EXPECT_DOUBLE_EQ(half.cx, 159.5);
+  EXPECT_DOUBLE_EQ(half.cy, 119.5);
+  // The outer edges of the image (pixel corners at -0.5 and width - 0.5) see the same bearings in
+  // the resized image, with distortion kept.
+  const PinholeCamera small = big.ScaledToWidth(160);
+  ASSERT_EQ(small.height, 120);
+  for (const auto& [u, v, us, vs] : {std::array<double, 4>{-0.5, -0.5, -0.5, -0.5},
+                                     std::array<double, 4>{639.5, 479.5, 159.5, 119.5},
+                                     std::array<double, 4>{319.5, 239.5, 79.5, 59.5}}) {
+    const Eigen::Vector2d a = big.PixelToNormalized(Eigen::Vector2d(u, v));
+    const Eigen::Vector2d b = small.PixelToNormalized(Eigen::Vector2d(us, vs));
+    EXPECT_LT((a - b).norm(), 1e-9) << u << " " << v;
+  }
+  EXPECT_THROW(big.ScaledToWidth(0), InvalidArgument);
 }
 
 TEST(PinholeCamera, ParsesTextIntrinsics) {

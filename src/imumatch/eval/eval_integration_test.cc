@@ -24,15 +24,7 @@ namespace imumatch {
 namespace {
 
 // A 320x240 Kinect-like camera keeps rendering and extraction fast (also under ASan).
-PinholeCamera SmallCamera() {
-  PinholeCamera c = PinholeCamera::KinectDefault();
-  c.width = 320;
-  c.height = 240;
-  c.fx = c.fy = 262.5;
-  c.cx = 159.5;
-  c.cy = 119.5;
-  return c;
-}
+PinholeCamera SmallCamera() { return PinholeCamera::KinectDefault().ScaledToWidth(320); }
 
 const MethodSummary& Row(const std::vector<MethodSummary>& rows, const std::string& c,
                          DetectorKind d, MatchMethod m) {

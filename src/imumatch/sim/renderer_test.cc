@@ -18,15 +18,7 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 
 // 320 x 240 with the Kinect field of view.
-PinholeCamera HalfCamera() {
-  PinholeCamera c = PinholeCamera::KinectDefault();
-  c.width = 320;
-  c.height = 240;
-  c.fx = c.fy = 262.5;
-  c.cx = 159.5;
-  c.cy = 119.5;
-  return c;
-}
+PinholeCamera HalfCamera() { return PinholeCamera::KinectDefault().ScaledToWidth(320); }
 
 const Scene& FurnishedScene() {
   static const Scene scene;

@@ -23,16 +23,7 @@ const Scene& CoarseScene() {
   return scene;
 }
 
-PinholeCamera SmallCamera(int width) {
-  PinholeCamera camera = PinholeCamera::KinectDefault();
-  const double s = width / 640.0;
-  camera.width = width;
-  camera.height = width * 3 / 4;
-  camera.fx = camera.fy = 525.0 * s;
-  camera.cx = (camera.width - 1) / 2.0;
-  camera.cy = (camera.height - 1) / 2.0;
-  return camera;
-}
+PinholeCamera SmallCamera(int width) { return PinholeCamera::KinectDefault().ScaledToWidth(width); }
 
 TEST(SyntheticSequenceTest, SeedPairFramesAndImuAgree) {
   SyntheticSequenceOptions options;
