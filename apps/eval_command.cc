@@ -41,6 +41,12 @@ struct CommonArgs {
   int images = 1;
   bool progress = false;
   int e2e_frames = 30;
+  // Matching knobs (defaults: the library's option structs).
+  double ratio = 0.8;
+  bool mutual = false;
+  double gate = 0.99;
+  double fixed_half = 10.0;
+  double z_min = -1.0, z_max = -1.0;  // < 0: PredictionOptions defaults
 };
 
 void AddCommonOptions(CLI::App* cmd, CommonArgs& a) {
@@ -67,6 +73,15 @@ void AddCommonOptions(CLI::App* cmd, CommonArgs& a) {
   cmd->add_option("--e2e-frames", a.e2e_frames, "frames of the end-to-end ORB timing (0 = skip)")
       ->capture_default_str();
   cmd->add_flag("--progress", a.progress, "progress bar on stderr (default: when it is a TTY)");
+  cmd->add_option("--ratio", a.ratio, "Lowe's ratio for brute force and guided matching")
+      ->capture_default_str();
+  cmd->add_flag("--mutual", a.mutual, "guided: keep only mutual best matches");
+  cmd->add_option("--gate", a.gate, "guided: chi-square gate probability of the search window")
+      ->capture_default_str();
+  cmd->add_option("--fixed-window", a.fixed_half, "fixed10 method: half size of the square (px)")
+      ->capture_default_str();
+  cmd->add_option("--z-min", a.z_min, "no-depth prediction: nearest depth of the segment (m)");
+  cmd->add_option("--z-max", a.z_max, "no-depth prediction: farthest depth of the segment (m)");
 }
 
 std::vector<std::string> SplitList(const std::string& s) {
@@ -94,6 +109,13 @@ EvaluationOptions MakeOptions(const CommonArgs& a) {
   o.keep_visuals = a.images;
   IMUMATCH_CHECK(a.threshold >= 0.0, "--threshold must be > 0");
   IMUMATCH_CHECK(a.e2e_frames == 0 || a.e2e_frames >= 2, "--e2e-frames must be 0 or >= 2");
+  o.ratio = a.ratio;
+  o.guided.ratio = a.ratio;
+  o.guided.mutual = a.mutual;
+  o.prediction.gate_probability = a.gate;
+  o.prediction.fixed_half_size = a.fixed_half;
+  if (a.z_min >= 0.0) o.prediction.segment_min_depth = a.z_min;
+  if (a.z_max >= 0.0) o.prediction.segment_max_depth = a.z_max;
   o.Check();
   return o;
 }

@@ -18,9 +18,8 @@ namespace imumatch {
 enum class WindowMode { kUncertainty, kFixed };
 
 // How a keypoint's depth is read from the depth image of frame A.
-//   kNearest: the pixel under the keypoint (rounded); when it has no reading, the valid pixel of
-//   the
-//             3x3 neighbourhood nearest to the keypoint's sub-pixel position.
+//   kNearest: the pixel under the keypoint (rounded); when it has no reading, the valid pixel
+//             of the 3x3 neighbourhood nearest to the keypoint's sub-pixel position.
 //   kMin3x3 / kMedian3x3: the minimum / median of the valid readings of the 3x3 neighbourhood.
 enum class DepthSampling { kNearest, kMin3x3, kMedian3x3 };
 
