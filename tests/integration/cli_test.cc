@@ -136,6 +136,9 @@ TEST_F(CliTest, BadInputsGiveClearErrorsAndExitCodes) {
   r = RunCli("eval " + pair + " --detectors orb,harris --out " + Path("o4"));
   EXPECT_EQ(r.exit_code, 4) << r.output;
   EXPECT_NE(r.output.find("harris"), std::string::npos) << r.output;
+  r = RunCli("eval " + pair + " --gate 1.5 --out " + Path("o5"));
+  EXPECT_EQ(r.exit_code, 4) << r.output;
+  EXPECT_NE(r.output.find("gate_probability"), std::string::npos) << r.output;
   // Usage errors (2).
   r = RunCli("eval");
   EXPECT_EQ(r.exit_code, 2) << r.output;
