@@ -1,5 +1,6 @@
 #include "imumatch/matching/guided_matcher.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -72,6 +73,7 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
   const float orient_tol = static_cast<float>(options.orientation_tolerance_deg);
   const float scale_tol = static_cast<float>(options.scale_tolerance_factor);
   const float inf = std::numeric_limits<float>::infinity();
+  const bool rivals_all = options.inconsistent_candidates_in_ratio;
 
   // B's keypoints and descriptors copied into the grid's cell order: a window's candidates are then
   // read from a few contiguous runs instead of scattered rows (O(m) copy, a few us per 1000).
@@ -124,7 +126,7 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
     const float r2 = p.radius * p.radius;
 
     bool any_in_window = false, any_angle_ok = false;
-    float best = inf, second = inf;
+    float best = inf, second = inf, rival = inf;
     int best_k = -1;
     int64_t evaluated = 0;
     grid_b.CollectSlotsInBox(p.min_x, p.min_y, p.max_x, p.max_y, &candidates);
@@ -132,12 +134,20 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
       const KeypointInfo& kb = info_b[k];
       if (capsule && p.SegmentDistanceSquared(kb.x, kb.y) > r2) continue;
       any_in_window = true;
-      if (check_angle && kb.angle_deg >= 0.0f &&
-          std::fabs(WrapDegrees(kb.angle_deg - expected_angle)) > orient_tol) {
+      const bool angle_ok = !(check_angle && kb.angle_deg >= 0.0f &&
+                              std::fabs(WrapDegrees(kb.angle_deg - expected_angle)) > orient_tol);
+      const bool size_ok =
+          !(check_size && kb.size > 0.0f && (kb.size < size_lo || kb.size > size_hi));
+      if (angle_ok) any_angle_ok = true;
+      if (!(angle_ok && size_ok)) {
+        if (rivals_all) {
+          // An inconsistent candidate cannot be the match but still competes in the ratio test.
+          const float c = cost_fn(da, desc_b.data() + static_cast<size_t>(k) * bytes, bytes);
+          ++evaluated;
+          if (c < rival) rival = c;
+        }
         continue;
       }
-      any_angle_ok = true;
-      if (check_size && kb.size > 0.0f && (kb.size < size_lo || kb.size > size_hi)) continue;
       const float c = cost_fn(da, desc_b.data() + static_cast<size_t>(k) * bytes, bytes);
       ++evaluated;
       if (c < second) {
@@ -179,7 +189,7 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
       ++stats.distance_threshold;
       continue;
     }
-    if (use_ratio && !(best < ratio_cost * std::min(second, max_cost))) {
+    if (use_ratio && !(best < ratio_cost * std::min({second, rival, max_cost}))) {
       ++stats.ratio_test;
       continue;
     }

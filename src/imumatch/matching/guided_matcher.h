@@ -26,6 +26,11 @@ struct GuidedMatcherOptions {
   // descriptors and for OpenCV's SIFT (norm ~512) alike.
   double max_hamming_fraction = 0.35;
   double max_l2_relative = 0.8;
+  // Candidates in the window that fail the orientation or scale check cannot be the match but
+  // still compete as second-best in the ratio test, as every keypoint does in a brute-force ratio
+  // test. Measured on the demo's seed cases (SIFT, SURF, ORB, AKAZE): guided SURF precision at
+  // 1 / 8 px 0.689 / 0.934 -> 0.746 / 0.979, SIFT 0.974 -> 0.979, for 1.3 % fewer correct matches.
+  bool inconsistent_candidates_in_ratio = true;
   // Reverse pass: keep i -> j only when, among the keypoints of A whose windows contain j and pass
   // the consistency checks, i is the one closest to j.
   bool mutual = false;

@@ -287,6 +287,26 @@ TEST(GuidedMatcherTest, DistanceThresholdAndRatioTest) {
   EXPECT_EQ(ro.correct, 29);
 }
 
+TEST(GuidedMatcherTest, InconsistentCandidatesStillCompeteInTheRatioTest) {
+  // A twin of keypoint 0's partner, same place and descriptor but turned by 90 degrees: it fails
+  // the orientation check, so it cannot be the match, yet it makes the match ambiguous.
+  SyntheticPair r = MakePair(30, 0, kTrueMotion, Motion(kTrueMotion), 8);
+  for (auto& k : r.kps_a) k.angle_deg = 10.0f;
+  for (auto& k : r.kps_b) k.angle_deg = 10.0f;  // the true motion barely rolls the camera
+  KeypointInfo twin = r.kps_b[r.partner[0]];
+  twin.angle_deg = 100.0f;
+  r.kps_b.push_back(twin);
+  r.desc_b.push_back(r.desc_b.row(r.partner[0]).clone());
+  GuidedMatcherOptions mo;
+  const Outcome strict = RunMatch(r, PredictionOptions(), mo);
+  EXPECT_EQ(strict.result.stats.ratio_test, 1);
+  EXPECT_EQ(strict.correct, 29);
+  mo.inconsistent_candidates_in_ratio = false;
+  const Outcome lax = RunMatch(r, PredictionOptions(), mo);
+  EXPECT_EQ(lax.result.stats.ratio_test, 0);
+  EXPECT_EQ(lax.correct, 30);
+}
+
 TEST(GuidedMatcherTest, CheckAndInputValidation) {
   GuidedMatcherOptions o;
   EXPECT_NO_THROW(o.Check());
