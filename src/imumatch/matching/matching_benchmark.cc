@@ -6,7 +6,6 @@
 #include <benchmark/benchmark.h>
 
 #include <cstdio>
-#include <fstream>
 #include <map>
 #include <string>
 
@@ -14,6 +13,8 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "imumatch/core/error.h"
+#include "imumatch/io/trajectory_io.h"  // ReadTumPose
 #include "imumatch/matching/baseline_matchers.h"
 #include "imumatch/matching/guided_matcher.h"
 
@@ -28,16 +29,6 @@ std::string DataPath(const std::string& file) {
   const char* env = std::getenv("IMUMATCH_DATA_DIR");
   const std::string dir = (env != nullptr && *env != '\0') ? env : IMUMATCH_BENCH_DATA_DIR;
   return dir + "/tum_fr1_xyz_pair/" + file;
-}
-
-Rigid3d ReadTumPose(const std::string& path) {
-  std::ifstream in(path);
-  double tx, ty, tz, qx, qy, qz, qw;
-  if (!(in >> tx >> ty >> tz >> qx >> qy >> qz >> qw)) {
-    std::fprintf(stderr, "cannot read pose %s\n", path.c_str());
-    std::exit(1);
-  }
-  return Rigid3d(Eigen::Quaterniond(qw, qx, qy, qz), Eigen::Vector3d(tx, ty, tz));
 }
 
 struct Frames {
@@ -56,8 +47,13 @@ const Frames& GetFrames() {
                    DataPath("").c_str());
       std::exit(1);
     }
-    fr.motion = CameraMotionFromPoses(0, ReadTumPose(DataPath("pose_prev.txt")), 1,
-                                      ReadTumPose(DataPath("pose_curr.txt")));
+    try {
+      fr.motion = CameraMotionFromPoses(0, ReadTumPose(DataPath("pose_prev.txt")), 1,
+                                        ReadTumPose(DataPath("pose_curr.txt")));
+    } catch (const Error& e) {
+      std::fprintf(stderr, "cannot read pose: %s\n", e.what());
+      std::exit(1);
+    }
     return fr;
   }();
   return f;

@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -13,21 +12,13 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "imumatch/io/trajectory_io.h"  // ReadTumPose
 #include "imumatch/matching/baseline_matchers.h"
 #include "imumatch/matching/guided_matcher.h"
 #include "imumatch/testing/test_data.h"
 
 namespace imumatch {
 namespace {
-
-Rigid3d ReadTumPose(const std::string& path) {
-  std::ifstream in(path);
-  EXPECT_TRUE(in.good()) << "cannot open " << path;
-  double tx, ty, tz, qx, qy, qz, qw;
-  in >> tx >> ty >> tz >> qx >> qy >> qz >> qw;
-  EXPECT_FALSE(in.fail()) << path;
-  return Rigid3d(Eigen::Quaterniond(qw, qx, qy, qz), Eigen::Vector3d(tx, ty, tz));
-}
 
 struct TumPair {
   cv::Mat gray_a, gray_b, depth_a;
