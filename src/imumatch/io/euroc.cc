@@ -7,6 +7,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "imumatch/core/error.h"
+#include "imumatch/io/imu_io.h"
 #include "imumatch/io/text_parsing.h"
 
 namespace imumatch {
@@ -103,21 +104,9 @@ Rigid3d GetTransform(const YAML::Node& map, const std::string& key, const std::s
 }  // namespace
 
 ImuBuffer ReadEurocImu(const std::string& path, const ImuBufferOptions& options) {
-  static const char* kNames[] = {"w_x", "w_y", "w_z", "a_x", "a_y", "a_z"};
-  ImuBuffer buffer(options);
-  for (const TextLine& line : ReadTextFields(path, FieldSeparator::kComma)) {
-    CheckFieldCount(line, 7, path, "timestamp [ns], w x y z [rad/s], a x y z [m/s^2]");
-    ImuSample s;
-    s.t_ns = ParseNsField(line.fields[0], path, line.line);
-    double v[6];
-    for (int i = 0; i < 6; ++i)
-      v[i] = ParseFiniteDouble(line.fields[i + 1], path, line.line, kNames[i]);
-    s.gyro_rad_s = Eigen::Vector3d(v[0], v[1], v[2]);
-    s.accel_m_s2 = Eigen::Vector3d(v[3], v[4], v[5]);
-    buffer.Push(s, path, line.line);
-  }
-  if (buffer.empty()) throw InputError(path, "no IMU samples found");
-  return buffer;
+  static const char* const kNames[6] = {"w_x", "w_y", "w_z", "a_x", "a_y", "a_z"};
+  return ReadImuTable(path, FieldSeparator::kComma, ImuTimeUnit::kNanoseconds,
+                      "timestamp [ns], w x y z [rad/s], a x y z [m/s^2]", kNames, options);
 }
 
 std::vector<StampedFile> ReadEurocImageList(const std::string& path) {

@@ -8,22 +8,30 @@
 
 namespace imumatch {
 
-ImuBuffer ReadImuText(const std::string& path, const ImuBufferOptions& options) {
-  static const char* kNames[] = {"gx", "gy", "gz", "ax", "ay", "az"};
+ImuBuffer ReadImuTable(const std::string& path, FieldSeparator separator, ImuTimeUnit time_unit,
+                       const std::string& layout, const char* const (&names)[6],
+                       const ImuBufferOptions& options) {
   ImuBuffer buffer(options);
-  for (const TextLine& line : ReadTextFields(path, FieldSeparator::kWhitespace)) {
-    CheckFieldCount(line, 7, path, "t_s gx gy gz ax ay az");
+  for (const TextLine& line : ReadTextFields(path, separator)) {
+    CheckFieldCount(line, 7, path, layout);
     ImuSample s;
-    s.t_ns = ParseSecondsField(line.fields[0], path, line.line);
+    s.t_ns = time_unit == ImuTimeUnit::kSeconds ? ParseSecondsField(line.fields[0], path, line.line)
+                                                : ParseNsField(line.fields[0], path, line.line);
     double v[6];
     for (int i = 0; i < 6; ++i)
-      v[i] = ParseFiniteDouble(line.fields[i + 1], path, line.line, kNames[i]);
+      v[i] = ParseFiniteDouble(line.fields[i + 1], path, line.line, names[i]);
     s.gyro_rad_s = Eigen::Vector3d(v[0], v[1], v[2]);
     s.accel_m_s2 = Eigen::Vector3d(v[3], v[4], v[5]);
     buffer.Push(s, path, line.line);
   }
   if (buffer.empty()) throw InputError(path, "no IMU samples found");
   return buffer;
+}
+
+ImuBuffer ReadImuText(const std::string& path, const ImuBufferOptions& options) {
+  static const char* const kNames[6] = {"gx", "gy", "gz", "ax", "ay", "az"};
+  return ReadImuTable(path, FieldSeparator::kWhitespace, ImuTimeUnit::kSeconds,
+                      "t_s gx gy gz ax ay az", kNames, options);
 }
 
 void WriteImuText(const std::string& path, const std::vector<ImuSample>& samples,

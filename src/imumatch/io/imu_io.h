@@ -5,6 +5,7 @@
 
 #include "imumatch/core/types.h"
 #include "imumatch/imu/imu_buffer.h"
+#include "imumatch/io/text_parsing.h"
 
 namespace imumatch {
 
@@ -16,6 +17,15 @@ namespace imumatch {
 // Throws InputError(path, line, ...) for a missing file, wrong field count, non-numeric or
 // non-finite value, and (through ImuBuffer::Push) duplicate or out-of-order timestamps.
 ImuBuffer ReadImuText(const std::string& path, const ImuBufferOptions& options = {});
+
+// The table reader behind ReadImuText and ReadEurocImu (euroc.h): seven fields a line, a timestamp
+// (decimal seconds or integer nanoseconds) then gyro x y z and accelerometer x y z. `layout`
+// describes the fields in errors, `names` labels the six values. Throws like ReadImuText, and
+// InputError when the file holds no sample.
+enum class ImuTimeUnit { kSeconds, kNanoseconds };
+ImuBuffer ReadImuTable(const std::string& path, FieldSeparator separator, ImuTimeUnit time_unit,
+                       const std::string& layout, const char* const (&names)[6],
+                       const ImuBufferOptions& options);
 
 // Writes samples so that ReadImuText returns them bit for bit (9-decimal seconds, 17-digit
 // values). Throws Error when the file cannot be written.
