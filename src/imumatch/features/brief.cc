@@ -61,16 +61,6 @@ const std::array<BriefTest, 256>& BriefPattern() {
   return pattern;
 }
 
-void Brief::detect(cv::InputArray image, std::vector<cv::KeyPoint>& keypoints,
-                   cv::InputArray mask) {
-  detectAndCompute(image, mask, keypoints, cv::noArray(), false);
-}
-
-void Brief::compute(cv::InputArray image, std::vector<cv::KeyPoint>& keypoints,
-                    cv::OutputArray descriptors) {
-  detectAndCompute(image, cv::noArray(), keypoints, descriptors, true);
-}
-
 cv::Ptr<Brief> Brief::Create() { return cv::makePtr<Brief>(); }
 
 void Brief::detectAndCompute(cv::InputArray image, cv::InputArray /*mask*/,

@@ -7,6 +7,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
 
+#include "imumatch/features/strict_feature2d.h"
+
 namespace imumatch {
 
 // One BRIEF binary test: compare the smoothed intensities at p = (x1, y1) and q = (x2, y2),
@@ -32,7 +34,7 @@ const std::array<BriefTest, 256>& BriefPattern();
 // InvalidArgument. compute() removes keypoints closer than 28 px (patch half-size 24 + box
 // half-size 4) to the image border, exactly like OpenCV's xfeatures2d BriefDescriptorExtractor
 // (cv::KeyPointsFilter::runByImageBorder with border 28).
-class Brief : public cv::Feature2D {
+class Brief : public StrictFeature2D {  // detect()/compute() throw on empty images
  public:
   static constexpr int kPatchSize = 48;
   static constexpr int kKernelSize = 9;
@@ -43,15 +45,6 @@ class Brief : public cv::Feature2D {
   void detectAndCompute(cv::InputArray image, cv::InputArray mask,
                         std::vector<cv::KeyPoint>& keypoints, cv::OutputArray descriptors,
                         bool useProvidedKeypoints = false) override;
-
-  // cv::Feature2D's detect() and compute() return silently on an empty image; these throw
-  // InvalidArgument instead, like detectAndCompute.
-  using cv::Feature2D::compute;
-  using cv::Feature2D::detect;
-  void detect(cv::InputArray image, std::vector<cv::KeyPoint>& keypoints,
-              cv::InputArray mask = cv::noArray()) override;
-  void compute(cv::InputArray image, std::vector<cv::KeyPoint>& keypoints,
-               cv::OutputArray descriptors) override;
 
   int descriptorSize() const override { return 32; }
   int descriptorType() const override { return CV_8U; }

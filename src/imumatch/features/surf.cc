@@ -489,15 +489,6 @@ void SurfOptions::Check() const {
 
 Surf::Surf(const SurfOptions& options) : options_(options) { options_.Check(); }
 
-void Surf::detect(cv::InputArray image, std::vector<cv::KeyPoint>& keypoints, cv::InputArray mask) {
-  detectAndCompute(image, mask, keypoints, cv::noArray(), false);
-}
-
-void Surf::compute(cv::InputArray image, std::vector<cv::KeyPoint>& keypoints,
-                   cv::OutputArray descriptors) {
-  detectAndCompute(image, cv::noArray(), keypoints, descriptors, true);
-}
-
 cv::Ptr<Surf> Surf::Create(const SurfOptions& options) { return cv::makePtr<Surf>(options); }
 
 void Surf::detectAndCompute(cv::InputArray image, cv::InputArray mask,

@@ -6,6 +6,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
 
+#include "imumatch/features/strict_feature2d.h"
+
 namespace imumatch {
 
 // Options of the SURF detector/descriptor (Bay, Ess, Tuytelaars, Van Gool, "Speeded-Up Robust
@@ -70,7 +72,7 @@ struct SurfOptions {
 // Speed: the responses of every layer and the descriptors are computed with cv::parallel_for_.
 // The response layers live in a per-thread buffer reused across calls (about 16 bytes per pixel
 // for the default options), so repeated calls do not allocate.
-class Surf : public cv::Feature2D {
+class Surf : public StrictFeature2D {  // detect()/compute() throw on empty images
  public:
   explicit Surf(const SurfOptions& options = SurfOptions());
   static cv::Ptr<Surf> Create(const SurfOptions& options = SurfOptions());
@@ -80,15 +82,6 @@ class Surf : public cv::Feature2D {
   void detectAndCompute(cv::InputArray image, cv::InputArray mask,
                         std::vector<cv::KeyPoint>& keypoints, cv::OutputArray descriptors,
                         bool useProvidedKeypoints = false) override;
-
-  // cv::Feature2D's detect() and compute() return silently on an empty image; these throw
-  // InvalidArgument instead, like detectAndCompute.
-  using cv::Feature2D::compute;
-  using cv::Feature2D::detect;
-  void detect(cv::InputArray image, std::vector<cv::KeyPoint>& keypoints,
-              cv::InputArray mask = cv::noArray()) override;
-  void compute(cv::InputArray image, std::vector<cv::KeyPoint>& keypoints,
-               cv::OutputArray descriptors) override;
 
   int descriptorSize() const override { return 64; }
   int descriptorType() const override { return CV_32F; }
