@@ -93,9 +93,9 @@ void SetCounters(benchmark::State& state, const FeatureSet& s, size_t matches) {
   state.counters["matches"] = static_cast<double>(matches);
 }
 
-void BM_Guided(benchmark::State& state) {
+// One guided iteration per loop: the whole per-frame work of GuidedMatcherWorkspace::Match.
+void RunGuided(benchmark::State& state, const PinholeCamera& camera) {
   const FeatureSet& s = GetFeatures(static_cast<int>(state.range(0)), state.range(1));
-  const PinholeCamera camera = BenchCamera();
   GuidedMatcherWorkspace workspace;
   size_t matches = 0;
   for (auto _ : state) {
@@ -108,19 +108,10 @@ void BM_Guided(benchmark::State& state) {
   SetCounters(state, s, matches);
 }
 
+void BM_Guided(benchmark::State& state) { RunGuided(state, BenchCamera()); }
+
 void BM_GuidedWithDistortion(benchmark::State& state) {
-  const FeatureSet& s = GetFeatures(static_cast<int>(state.range(0)), state.range(1));
-  const PinholeCamera camera = PinholeCamera::TumFreiburg1();
-  GuidedMatcherWorkspace workspace;
-  size_t matches = 0;
-  for (auto _ : state) {
-    MatchResult r =
-        workspace.Match(camera, GetFrames().motion, s.kps_a, s.desc_a, GetFrames().depth_a, s.kps_b,
-                        s.desc_b, PredictionOptions(), GuidedMatcherOptions());
-    matches = r.matches.size();
-    benchmark::DoNotOptimize(r.matches.data());
-  }
-  SetCounters(state, s, matches);
+  RunGuided(state, PinholeCamera::TumFreiburg1());
 }
 
 void BM_CvKnnRatio(benchmark::State& state) {
