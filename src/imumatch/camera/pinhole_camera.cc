@@ -34,42 +34,51 @@ Eigen::Matrix3d PinholeCamera::K() const {
   return k;
 }
 
-Eigen::Vector2d PinholeCamera::NormalizedToPixel(const Eigen::Vector2d& xy) const {
-  double x = xy.x(), y = xy.y();
-  if (HasDistortion()) {
-    const auto& [k1, k2, p1, p2, k3] = distortion;
-    const double r2 = x * x + y * y;
-    const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
-    const double xd = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
-    const double yd = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
-    x = xd;
-    y = yd;
+Eigen::Vector2d PinholeCamera::DistortNormalized(const Eigen::Vector2d& xy,
+                                                 Eigen::Matrix2d* jacobian) const {
+  const double x = xy.x(), y = xy.y();
+  const auto& [k1, k2, p1, p2, k3] = distortion;
+  const double r2 = x * x + y * y;
+  const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+  if (jacobian != nullptr) {
+    // d radial / d r2, and d r2 / dx = 2x, d r2 / dy = 2y.
+    const double dradial = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2);
+    const double cross = 2.0 * x * y * dradial + 2.0 * p1 * x + 2.0 * p2 * y;
+    (*jacobian) << radial + 2.0 * x * x * dradial + 2.0 * p1 * y + 6.0 * p2 * x, cross, cross,
+        radial + 2.0 * y * y * dradial + 6.0 * p1 * y + 2.0 * p2 * x;
   }
-  return Eigen::Vector2d(fx * x + cx, fy * y + cy);
+  return Eigen::Vector2d(x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x),
+                         y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y);
+}
+
+Eigen::Vector2d PinholeCamera::NormalizedToPixel(const Eigen::Vector2d& xy) const {
+  if (!HasDistortion()) return NormalizedToIdeal(xy);
+  return NormalizedToIdeal(DistortNormalized(xy));
 }
 
 Eigen::Vector2d PinholeCamera::PixelToNormalized(const Eigen::Vector2d& uv) const {
-  const Eigen::Vector2d distorted((uv.x() - cx) / fx, (uv.y() - cy) / fy);
+  const Eigen::Vector2d distorted = IdealToNormalized(uv);
   if (!HasDistortion()) return distorted;
-  // Gauss-Newton on the distortion model with a numeric Jacobian; converges in a few steps for
-  // points inside the image.
+  // Newton on the distortion model with its analytic Jacobian; converges in a few steps for points
+  // inside the image (the model is monotonic there).
   Eigen::Vector2d xy = distorted;
-  const auto distort = [this](const Eigen::Vector2d& p) {
-    const Eigen::Vector2d pix = NormalizedToPixel(p);
-    return Eigen::Vector2d((pix.x() - cx) / fx, (pix.y() - cy) / fy);
-  };
   for (int it = 0; it < 20; ++it) {
-    const Eigen::Vector2d r = distort(xy) - distorted;
-    if (r.norm() < 1e-14) break;
     Eigen::Matrix2d j;
-    const double h = 1e-7;
-    j.col(0) =
-        (distort(xy + Eigen::Vector2d(h, 0)) - distort(xy - Eigen::Vector2d(h, 0))) / (2 * h);
-    j.col(1) =
-        (distort(xy + Eigen::Vector2d(0, h)) - distort(xy - Eigen::Vector2d(0, h))) / (2 * h);
+    const Eigen::Vector2d r = DistortNormalized(xy, &j) - distorted;
+    if (!(r.squaredNorm() >= 1e-28)) break;  // converged (or NaN)
     xy -= j.inverse() * r;
   }
   return xy;
+}
+
+Eigen::Matrix2d PinholeCamera::IdealFromPixelJacobian(const Eigen::Vector2d& ideal) const {
+  if (!HasDistortion()) return Eigen::Matrix2d::Identity();
+  Eigen::Matrix2d j;
+  DistortNormalized(IdealToNormalized(ideal), &j);
+  // ideal = K xy, pixel = K d(xy): d ideal / d pixel = K J^-1 K^-1.
+  const Eigen::Matrix2d k = Eigen::Vector2d(fx, fy).asDiagonal();
+  const Eigen::Matrix2d k_inv = Eigen::Vector2d(1.0 / fx, 1.0 / fy).asDiagonal();
+  return k * j.inverse() * k_inv;
 }
 
 std::optional<Eigen::Vector2d> PinholeCamera::Project(const Eigen::Vector3d& p_in_cam) const {

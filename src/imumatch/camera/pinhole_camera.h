@@ -42,6 +42,29 @@ struct PinholeCamera {
   Eigen::Vector2d PixelToNormalized(const Eigen::Vector2d& uv) const;
   // z=1 plane point -> pixel (distorted).
   Eigen::Vector2d NormalizedToPixel(const Eigen::Vector2d& xy) const;
+  // The distortion on the z=1 plane, xy -> xy_distorted, and (when jacobian is given) its 2x2
+  // Jacobian d xy_distorted / d xy, analytic. The identity without distortion.
+  Eigen::Vector2d DistortNormalized(const Eigen::Vector2d& xy,
+                                    Eigen::Matrix2d* jacobian = nullptr) const;
+
+  // "Ideal" pixels: the pinhole image K [x y 1] of the undistorted bearing (x, y). They equal the
+  // image pixels for a camera without distortion; in them the epipolar geometry is straight lines.
+  Eigen::Vector2d NormalizedToIdeal(const Eigen::Vector2d& xy) const {
+    return Eigen::Vector2d(fx * xy.x() + cx, fy * xy.y() + cy);
+  }
+  Eigen::Vector2d IdealToNormalized(const Eigen::Vector2d& ideal) const {
+    return Eigen::Vector2d((ideal.x() - cx) / fx, (ideal.y() - cy) / fy);
+  }
+  // Ideal pixel -> image pixel (closed form) and image pixel -> ideal pixel (iterative).
+  Eigen::Vector2d IdealToPixel(const Eigen::Vector2d& ideal) const {
+    return NormalizedToPixel(IdealToNormalized(ideal));
+  }
+  Eigen::Vector2d PixelToIdeal(const Eigen::Vector2d& uv) const {
+    return NormalizedToIdeal(PixelToNormalized(uv));
+  }
+  // d ideal / d image pixel at the ideal pixel `ideal`: K J^-1 K^-1 with J the distortion's
+  // Jacobian. It maps image-pixel noise (keypoint localisation) into ideal pixels.
+  Eigen::Matrix2d IdealFromPixelJacobian(const Eigen::Vector2d& ideal) const;
 
   // Raw 16-bit depth -> metres; 0 (no reading) maps to NaN.
   double DepthFromRaw(uint16_t raw) const;

@@ -1,0 +1,100 @@
+#include "imumatch/camera/pixel_undistorter.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+#include <Eigen/LU>
+
+namespace imumatch {
+namespace {
+
+// EuRoC MH_05 cam0 (mav0/cam0/sensor.yaml): a strong barrel lens, k1 = -0.28.
+PinholeCamera EurocCam0() {
+  PinholeCamera c;
+  c.width = 752;
+  c.height = 480;
+  c.fx = 458.654;
+  c.fy = 457.296;
+  c.cx = 367.215;
+  c.cy = 248.375;
+  c.distortion = {-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05, 0.0};
+  return c;
+}
+
+TEST(PinholeCamera, DistortionJacobianMatchesFiniteDifferences) {
+  for (const PinholeCamera& cam : {EurocCam0(), PinholeCamera::TumFreiburg1()}) {
+    for (const Eigen::Vector2d& xy :
+         {Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(0.6, -0.4), Eigen::Vector2d(-0.8, 0.5)}) {
+      Eigen::Matrix2d j;
+      cam.DistortNormalized(xy, &j);
+      const double h = 1e-6;
+      for (int k = 0; k < 2; ++k) {
+        const Eigen::Vector2d e = h * Eigen::Vector2d::Unit(k);
+        const Eigen::Vector2d numeric =
+            (cam.DistortNormalized(xy + e) - cam.DistortNormalized(xy - e)) / (2 * h);
+        EXPECT_LT((j.col(k) - numeric).norm(), 1e-7) << xy.transpose();
+      }
+    }
+  }
+}
+
+TEST(PixelUndistorter, AgreesWithTheForwardModelEverywhereInTheImage) {
+  const PinholeCamera cam = EurocCam0();
+  const PixelUndistorter undistorter(cam);
+  EXPECT_FALSE(undistorter.identity());
+  double worst = 0.0;
+  for (double v = -0.5; v <= 479.5; v += 3.7) {
+    for (double u = -0.5; u <= 751.5; u += 4.3) {
+      const Eigen::Vector2d uv(u, v);
+      Eigen::Matrix2d jac;
+      const Eigen::Vector2d ideal = undistorter.ToIdeal(uv, &jac);
+      // The independent truth: the closed-form distortion model maps the result back onto uv.
+      worst = std::max(worst, (cam.IdealToPixel(ideal) - uv).norm());
+      ASSERT_TRUE(undistorter.camera().IsInside(uv));
+      // The Jacobian against central differences of the exact (iterative) inverse.
+      if (std::fmod(u, 40.0) < 4.3 && std::fmod(v, 40.0) < 3.7) {
+        const double h = 1e-3;
+        for (int k = 0; k < 2; ++k) {
+          const Eigen::Vector2d e = h * Eigen::Vector2d::Unit(k);
+          const Eigen::Vector2d numeric =
+              (cam.PixelToIdeal(uv + e) - cam.PixelToIdeal(uv - e)) / (2 * h);
+          EXPECT_LT((jac.col(k) - numeric).norm(), 2e-3) << uv.transpose();
+        }
+      }
+    }
+  }
+  EXPECT_LT(worst, 1e-5);
+  // A barrel lens: the corners of the image reach further out in ideal pixels than the image.
+  EXPECT_LT(undistorter.ideal_min_x(), -0.5 - 20.0);
+  EXPECT_GT(undistorter.ideal_max_x(), 751.5 + 20.0);
+  const Eigen::Vector2d corner = cam.PixelToIdeal(Eigen::Vector2d(-0.5, -0.5));
+  EXPECT_NEAR(undistorter.ideal_min_x(), std::min(corner.x(), undistorter.ideal_min_x()), 1e-9);
+  // Outside the table: the iterative inverse, still exact.
+  const Eigen::Vector2d outside(-5.0, 490.0);
+  EXPECT_LT((cam.IdealToPixel(undistorter.ToIdeal(outside)) - outside).norm(), 1e-6);
+  EXPECT_LT((undistorter.ToImage(undistorter.ToIdeal(outside)) - outside).norm(), 1e-6);
+}
+
+TEST(PixelUndistorter, IsTheIdentityWithoutDistortion) {
+  const PixelUndistorter undistorter(PinholeCamera::KinectDefault());
+  EXPECT_TRUE(undistorter.identity());
+  Eigen::Matrix2d jac;
+  const Eigen::Vector2d uv(12.25, 400.5);
+  EXPECT_EQ(undistorter.ToIdeal(uv, &jac), uv);
+  EXPECT_TRUE(jac.isIdentity());
+  EXPECT_EQ(undistorter.ideal_max_x(), 639.5);
+  EXPECT_EQ(undistorter.ideal_min_y(), -0.5);
+}
+
+TEST(PinholeCamera, IdealFromPixelJacobianStretchesTheCornersOfABarrelLens) {
+  const PinholeCamera cam = EurocCam0();
+  // Centre: no stretch. Corner: a barrel lens squeezes the periphery, so one image pixel covers
+  // more than one ideal pixel radially.
+  EXPECT_TRUE(cam.IdealFromPixelJacobian(Eigen::Vector2d(cam.cx, cam.cy))
+                  .isApprox(Eigen::Matrix2d::Identity(), 1e-12));
+  const Eigen::Matrix2d corner = cam.IdealFromPixelJacobian(cam.PixelToIdeal({5.0, 5.0}));
+  EXPECT_GT(corner.determinant(), 1.3);
+}
+
+}  // namespace
+}  // namespace imumatch
