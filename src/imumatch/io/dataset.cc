@@ -285,6 +285,9 @@ Dataset LoadEurocDataset(const std::string& path, const DatasetOptions& options)
   // Name of the folder above mav0 (e.g. V1_01_easy).
   d.name = FolderName(fs::path(seq.mav0).lexically_normal().parent_path().string());
   d.camera = options.camera ? *options.camera : seq.cam0.camera;
+  // The depth scale describes the depth files, not the lens, so depth0's value wins even over an
+  // intrinsics override.
+  if (seq.depth0) d.camera.depth_scale = seq.depth0->depth_scale;
   d.cam_from_imu = seq.CamFromImu();
   d.imu_params = seq.imu0.params;
   d.imu = std::move(seq.imu);
@@ -298,11 +301,20 @@ Dataset LoadEurocDataset(const std::string& path, const DatasetOptions& options)
     body_poses.push_back({s.t_ns, s.world_from_body});
   }
   const std::string list = seq.mav0 + "/cam0/data.csv";
+  const std::string depth_list = seq.mav0 + "/depth0/data.csv";
+  // ReadEurocSequence guarantees every depth row has a cam0 row with the same timestamp and both
+  // lists are increasing, so one forward walk pairs them; cam0 frames in between get no depth.
+  auto depth = seq.depth_images.begin();
   for (const StampedFile& f : seq.images) {
     FrameRecord r;
     r.t_ns = f.t_ns;
     r.image_path = seq.ImagePath(f);
     if (options.check_files_exist) CheckExists(r.image_path, list, f.line);
+    if (depth != seq.depth_images.end() && depth->t_ns == f.t_ns) {
+      r.depth_path = seq.DepthPath(*depth);
+      if (options.check_files_exist) CheckExists(r.depth_path, depth_list, depth->line);
+      ++depth;
+    }
     d.frames.push_back(std::move(r));
   }
   const auto gt =

@@ -24,7 +24,9 @@ const char* ToString(DatasetKind kind);  // "tum_rgbd" | "euroc" | "synthetic"
 struct FrameRecord {
   int64_t t_ns = 0;
   std::string image_path;  // full path (root joined with the list's relative name)
-  std::string depth_path;  // empty if none (EuRoC, or TUM rgb frames without associated depth)
+  // Empty if none: EuRoC without mav0/depth0 or a cam0 frame without a depth0 row, TUM rgb frames
+  // without associated depth.
+  std::string depth_path;
   std::optional<Rigid3d> world_from_cam;  // ground truth at t_ns, when known
   // Ground-truth velocity of the IMU in the world at t_ns, when known (synthetic: exact; EuRoC:
   // interpolated from state_groundtruth_estimate0, body = IMU; TUM: from the spline fit used to
@@ -50,6 +52,7 @@ struct DatasetOptions {
   // Intrinsics override. Otherwise: EuRoC cam0/sensor.yaml; synthetic sequence.json; TUM a
   // camera.txt beside rgb.txt (ReadCameraFromText format), else the published calibration for
   // folders named *freiburg1* / *freiburg2* / *freiburg3*, else PinholeCamera::KinectDefault().
+  // A EuRoC depth0/sensor.yaml sets depth_scale even when this is given.
   std::optional<PinholeCamera> camera;
 
   // TUM RGB-D association (associate.py): rgb-depth pairs and ground truth within this difference.

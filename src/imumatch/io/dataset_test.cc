@@ -1,7 +1,9 @@
 #include "imumatch/io/dataset.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -103,6 +105,188 @@ TEST(Dataset, EurocGroundTruthBecomesWorldFromCam) {
             1e-12);
   ASSERT_TRUE(d.frames[1].imu_velocity_in_world.has_value());
   EXPECT_NEAR(d.frames[1].imu_velocity_in_world->x(), 0.5, 1e-12);
+}
+
+TEST(Dataset, EurocMh05DepthOnFirst36Frames) {
+  const Dataset d = LoadDataset(DataPath("euroc_mh05_flight"));
+  EXPECT_EQ(d.kind, DatasetKind::kEuroc);
+  ASSERT_EQ(d.frames.size(), 200u);
+  EXPECT_DOUBLE_EQ(d.camera.depth_scale, 1000.0);
+  size_t with_depth = 0;
+  for (size_t i = 0; i < d.frames.size(); ++i) {
+    const FrameRecord& f = d.frames[i];
+    if (i < 36) {
+      EXPECT_EQ(f.depth_path,
+                DataPath("euroc_mh05_flight/mav0/depth0/data/" + std::to_string(f.t_ns) + ".png"))
+          << i;
+    } else {
+      EXPECT_TRUE(f.depth_path.empty()) << i << ": " << f.depth_path;
+    }
+    with_depth += f.depth_path.empty() ? 0 : 1;
+  }
+  EXPECT_EQ(with_depth, 36u);
+
+  // Frame 0's depth decodes on cam0's grid with metric values of a room-sized scene.
+  const cv::Mat raw = LoadDepth(d.frames[0].depth_path, cv::Size(d.camera.width, d.camera.height));
+  EXPECT_EQ(raw.type(), CV_16UC1);
+  EXPECT_EQ(raw.size(), cv::Size(752, 480));
+  const cv::Mat metres = DepthToMetres(raw, d.camera.depth_scale);
+  std::vector<float> valid;
+  for (int r = 0; r < metres.rows; ++r) {
+    for (int c = 0; c < metres.cols; ++c) {
+      if (std::isfinite(metres.at<float>(r, c))) valid.push_back(metres.at<float>(r, c));
+    }
+  }
+  ASSERT_GT(valid.size(), 1000u);
+  std::nth_element(valid.begin(), valid.begin() + static_cast<std::ptrdiff_t>(valid.size() / 2),
+                   valid.end());
+  const float median = valid[valid.size() / 2];
+  EXPECT_GT(median, 0.5f);
+  EXPECT_LT(median, 20.0f);
+
+  // An intrinsics override does not describe the depth files: depth_scale still comes from
+  // depth0/sensor.yaml. Frame selection keeps each frame's depth.
+  DatasetOptions options;
+  options.camera = PinholeCamera::TumFreiburg1();
+  options.first_frame = 30;
+  options.max_frames = 10;
+  const Dataset sub = LoadDataset(DataPath("euroc_mh05_flight"), options);
+  EXPECT_DOUBLE_EQ(sub.camera.fx, 517.3);
+  EXPECT_DOUBLE_EQ(sub.camera.depth_scale, 1000.0);
+  ASSERT_EQ(sub.frames.size(), 10u);
+  for (size_t i = 0; i < sub.frames.size(); ++i) {
+    EXPECT_EQ(sub.frames[i].depth_path.empty(), i >= 6) << i;
+  }
+}
+
+// A small EuRoC folder with depth0: the real MH_05 sensor.yaml files, three cam0 frames (tiny
+// placeholder PNGs: only their existence is checked while loading) at 1.00, 1.05, 1.10 s, an IMU
+// log around them, and depth0 rows for the first and last frame with 752x480 16-bit PNGs.
+struct EurocDepthFolder {
+  std::string root;  // folder holding mav0
+  std::string mav0;
+  std::string depth_csv;
+  std::string depth_yaml;
+};
+
+const char* const kDepthHeader = "#timestamp [ns],filename\n";
+
+EurocDepthFolder MakeEurocDepthFolder(const TempDir& dir) {
+  EurocDepthFolder f;
+  f.root = dir.Path("MH_depth");
+  f.mav0 = f.root + "/mav0";
+  f.depth_csv = f.mav0 + "/depth0/data.csv";
+  f.depth_yaml = f.mav0 + "/depth0/sensor.yaml";
+  const std::string real = DataPath("euroc_mh05_flight/mav0");
+  fs::create_directories(f.mav0 + "/cam0/data");
+  fs::create_directories(f.mav0 + "/imu0");
+  fs::create_directories(f.mav0 + "/depth0/data");
+  fs::copy_file(real + "/cam0/sensor.yaml", f.mav0 + "/cam0/sensor.yaml");
+  fs::copy_file(real + "/imu0/sensor.yaml", f.mav0 + "/imu0/sensor.yaml");
+  dir.Write(
+      "MH_depth/mav0/cam0/data.csv",
+      std::string(kDepthHeader) +
+          "1000000000,1000000000.png\n1050000000,1050000000.png\n1100000000,1100000000.png\n");
+  for (const char* name : {"1000000000.png", "1050000000.png", "1100000000.png"}) {
+    WriteImage(f.mav0 + "/cam0/data/" + name, cv::Mat(48, 64, CV_8UC1, cv::Scalar(9)));
+  }
+  std::string imu;
+  for (int i = 0; i <= 40; ++i) {
+    imu += std::to_string(950000000 + 5000000 * i) + ",0,0,0.1,0,0,9.81\n";
+  }
+  dir.Write("MH_depth/mav0/imu0/data.csv", imu);
+  dir.Write("MH_depth/mav0/depth0/sensor.yaml",
+            "%YAML:1.0\nsensor_type: depth\nregistered_to: cam0\ndepth_scale: 5000.0\n");
+  dir.Write("MH_depth/mav0/depth0/data.csv",
+            std::string(kDepthHeader) + "1000000000,1000000000.png\n1100000000,1100000000.png\n");
+  for (const char* name : {"1000000000.png", "1100000000.png"}) {
+    WriteImage(f.mav0 + "/depth0/data/" + name, cv::Mat(480, 752, CV_16UC1, cv::Scalar(7500)));
+  }
+  return f;
+}
+
+TEST(Dataset, EurocSyntheticDepthFolderLoads) {
+  TempDir dir;
+  const EurocDepthFolder f = MakeEurocDepthFolder(dir);
+  const Dataset d = LoadDataset(f.root);
+  ASSERT_EQ(d.frames.size(), 3u);
+  EXPECT_DOUBLE_EQ(d.camera.depth_scale, 5000.0);
+  EXPECT_EQ(d.frames[0].depth_path, f.mav0 + "/depth0/data/1000000000.png");
+  EXPECT_TRUE(d.frames[1].depth_path.empty());  // a frame without depth
+  EXPECT_EQ(d.frames[2].depth_path, f.mav0 + "/depth0/data/1100000000.png");
+  const cv::Mat metres =
+      DepthToMetres(LoadDepth(d.frames[2].depth_path, cv::Size(d.camera.width, d.camera.height)),
+                    d.camera.depth_scale);
+  EXPECT_FLOAT_EQ(metres.at<float>(0, 0), 1.5f);
+  // Without depth0 the folder loads as before: no depth anywhere, the camera's own depth_scale.
+  fs::remove_all(f.mav0 + "/depth0");
+  const Dataset no_depth = LoadDataset(f.root);
+  ASSERT_EQ(no_depth.frames.size(), 3u);
+  for (const FrameRecord& r : no_depth.frames) EXPECT_TRUE(r.depth_path.empty());
+  EXPECT_DOUBLE_EQ(no_depth.camera.depth_scale, PinholeCamera().depth_scale);
+}
+
+TEST(Dataset, EurocDepthListErrorsNameFileAndLine) {
+  TempDir dir;
+  const EurocDepthFolder f = MakeEurocDepthFolder(dir);
+  auto write_list = [&](const std::string& rows) {
+    dir.Write("MH_depth/mav0/depth0/data.csv", std::string(kDepthHeader) + rows);
+  };
+  write_list("1100000000,1100000000.png\n1000000000,1000000000.png\n");
+  ExpectInputError([&] { LoadDataset(f.root); }, f.depth_csv, 3, "before the previous");
+  write_list("1000000000,1000000000.png\n1000000000,1100000000.png\n");
+  ExpectInputError([&] { LoadDataset(f.root); }, f.depth_csv, 3, "duplicate");
+  write_list("1000000000,1000000000.png\n1100000000;1100000000.png\n");
+  ExpectInputError([&] { LoadDataset(f.root); }, f.depth_csv, 3, "expected 2 fields");
+  // Exact timestamps only: 1 ns off cam0's frame is not that frame's depth.
+  write_list("1000000000,1000000000.png\n1100000001,1100000000.png\n");
+  ExpectInputError([&] { LoadDataset(f.root); }, f.depth_csv, 3,
+                   "depth image at t=1100000001 ns has no cam0 frame");
+  write_list("1000000000,1000000000.png\n1100000000,missing.png\n");
+  ExpectInputError([&] { LoadDataset(f.root); }, f.depth_csv, 3, "missing.png not found");
+  DatasetOptions no_check;
+  no_check.check_files_exist = false;
+  EXPECT_EQ(LoadDataset(f.root, no_check).frames[2].depth_path,
+            f.mav0 + "/depth0/data/missing.png");
+  // depth0 present: its list is required.
+  fs::remove(f.depth_csv);
+  ExpectInputError([&] { LoadDataset(f.root); }, f.depth_csv, 0, "not found");
+}
+
+TEST(Dataset, EurocDepthSensorErrorsNameFileAndLine) {
+  TempDir dir;
+  const EurocDepthFolder f = MakeEurocDepthFolder(dir);
+  auto write_yaml = [&](const std::string& text) {
+    dir.Write("MH_depth/mav0/depth0/sensor.yaml", text);
+  };
+  write_yaml("%YAML:1.0\nsensor_type: depth\ndepth_scale: 0\n");
+  ExpectInputError([&] { LoadDataset(f.root); }, f.depth_yaml, 3, "depth_scale must be > 0");
+  write_yaml("%YAML:1.0\nsensor_type: depth\n");
+  ExpectInputError([&] { LoadDataset(f.root); }, f.depth_yaml, 0, "missing key 'depth_scale'");
+  write_yaml("%YAML:1.0\nsensor_type: depth\ndepth_scale: thousand\n");
+  ExpectInputError([&] { LoadDataset(f.root); }, f.depth_yaml, 3, "'thousand' is not a number");
+  write_yaml("%YAML:1.0\nsensor_type: depth\nregistered_to: cam1\ndepth_scale: 1000\n");
+  ExpectInputError([&] { LoadDataset(f.root); }, f.depth_yaml, 3, "registered_to 'cam1'");
+  fs::remove(f.depth_yaml);
+  ExpectInputError([&] { LoadDataset(f.root); }, f.depth_yaml, 0, "not found");
+}
+
+TEST(Dataset, EurocDepthContentCheckedWhenDecoded) {
+  TempDir dir;
+  const EurocDepthFolder f = MakeEurocDepthFolder(dir);
+  const std::string eight_bit = f.mav0 + "/depth0/data/1000000000.png";
+  const std::string small = f.mav0 + "/depth0/data/1100000000.png";
+  WriteImage(eight_bit, cv::Mat(480, 752, CV_8UC1, cv::Scalar(7)));
+  WriteImage(small, cv::Mat(240, 376, CV_16UC1, cv::Scalar(7500)));
+  // Loading only checks that the files exist; decoding checks their content against cam0.
+  const Dataset d = LoadDataset(f.root);
+  const cv::Size cam_size(d.camera.width, d.camera.height);
+  ASSERT_EQ(d.frames[0].depth_path, eight_bit);
+  ASSERT_EQ(d.frames[2].depth_path, small);
+  ExpectInputError([&] { LoadDepth(d.frames[0].depth_path, cam_size); }, eight_bit, 0,
+                   "16-bit single-channel");
+  ExpectInputError([&] { LoadDepth(d.frames[2].depth_path, cam_size); }, small, 0,
+                   "depth image is 376x240, expected 752x480");
 }
 
 // Writes a TUM RGB-D folder: the real image pair as two frames (depth 4 ms after rgb) and a

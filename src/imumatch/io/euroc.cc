@@ -1,5 +1,6 @@
 #include "imumatch/io/euroc.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
@@ -101,15 +102,8 @@ Rigid3d GetTransform(const YAML::Node& map, const std::string& key, const std::s
   }
 }
 
-}  // namespace
-
-ImuBuffer ReadEurocImu(const std::string& path, const ImuBufferOptions& options) {
-  static const char* const kNames[6] = {"w_x", "w_y", "w_z", "a_x", "a_y", "a_z"};
-  return ReadImuTable(path, FieldSeparator::kComma, ImuTimeUnit::kNanoseconds,
-                      "timestamp [ns], w x y z [rad/s], a x y z [m/s^2]", kNames, options);
-}
-
-std::vector<StampedFile> ReadEurocImageList(const std::string& path) {
+// "timestamp [ns], filename" rows with strictly increasing timestamps (cam0 and depth0 lists).
+std::vector<StampedFile> ReadStampedFileList(const std::string& path, const std::string& what) {
   std::vector<StampedFile> files;
   for (const TextLine& line : ReadTextFields(path, FieldSeparator::kComma)) {
     CheckFieldCount(line, 2, path, "timestamp [ns], filename");
@@ -122,8 +116,24 @@ std::vector<StampedFile> ReadEurocImageList(const std::string& path) {
     f.line = line.line;
     files.push_back(std::move(f));
   }
-  if (files.empty()) throw InputError(path, "no images listed");
+  if (files.empty()) throw InputError(path, "no " + what + " listed");
   return files;
+}
+
+}  // namespace
+
+ImuBuffer ReadEurocImu(const std::string& path, const ImuBufferOptions& options) {
+  static const char* const kNames[6] = {"w_x", "w_y", "w_z", "a_x", "a_y", "a_z"};
+  return ReadImuTable(path, FieldSeparator::kComma, ImuTimeUnit::kNanoseconds,
+                      "timestamp [ns], w x y z [rad/s], a x y z [m/s^2]", kNames, options);
+}
+
+std::vector<StampedFile> ReadEurocImageList(const std::string& path) {
+  return ReadStampedFileList(path, "images");
+}
+
+std::vector<StampedFile> ReadEurocDepthList(const std::string& path) {
+  return ReadStampedFileList(path, "depth images");
 }
 
 EurocCameraSensor ReadEurocCameraSensor(const std::string& path) {
@@ -184,6 +194,27 @@ EurocImuSensor ReadEurocImuSensor(const std::string& path) {
   return sensor;
 }
 
+EurocDepthSensor ReadEurocDepthSensor(const std::string& path) {
+  const YAML::Node root = LoadOpenCvYaml(path);
+  EurocDepthSensor sensor;
+  sensor.depth_scale = GetDouble(root, "depth_scale", path);
+  if (sensor.depth_scale <= 0) {
+    throw InputError(
+        path, LineOf(root["depth_scale"]),
+        "depth_scale must be > 0 (raw depth units per metre), got " + root["depth_scale"].Scalar());
+  }
+  // Absent means cam0: the layout only defines depth on cam0's grid.
+  if (const YAML::Node node = root["registered_to"]; node.IsDefined() && !node.IsNull()) {
+    sensor.registered_to = GetString(root, "registered_to", path);
+    if (sensor.registered_to != "cam0") {
+      throw InputError(path, LineOf(node),
+                       "registered_to '" + sensor.registered_to +
+                           "' is not supported (depth0 must be registered to cam0)");
+    }
+  }
+  return sensor;
+}
+
 std::vector<EurocGroundTruthState> ReadEurocGroundTruth(const std::string& path) {
   std::vector<EurocGroundTruthState> states;
   int previous_line = 0;
@@ -235,6 +266,22 @@ EurocSequence ReadEurocSequence(const std::string& path, const ImuBufferOptions&
   std::error_code ec;
   const std::string gt = mav0 + "/state_groundtruth_estimate0/data.csv";
   if (fs::exists(gt, ec)) seq.groundtruth = ReadEurocGroundTruth(gt);
+  if (fs::is_directory(mav0 + "/depth0", ec)) {
+    seq.depth0 = ReadEurocDepthSensor(mav0 + "/depth0/sensor.yaml");
+    const std::string depth_list = mav0 + "/depth0/data.csv";
+    seq.depth_images = ReadEurocDepthList(depth_list);
+    // Both lists are strictly increasing (checked above), so a binary search finds exact matches.
+    for (const StampedFile& d : seq.depth_images) {
+      const auto it =
+          std::lower_bound(seq.images.begin(), seq.images.end(), d.t_ns,
+                           [](const StampedFile& image, int64_t t) { return image.t_ns < t; });
+      if (it == seq.images.end() || it->t_ns != d.t_ns) {
+        throw InputError(depth_list, d.line,
+                         "depth image at t=" + std::to_string(d.t_ns) +
+                             " ns has no cam0 frame (depth0 timestamps must equal cam0's)");
+      }
+    }
+  }
   return seq;
 }
 

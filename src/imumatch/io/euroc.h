@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,10 @@ namespace imumatch {
 //   mav0/cam0/sensor.yaml intrinsics, resolution, radial-tangential distortion, rate, T_BS
 //   mav0/state_groundtruth_estimate0/data.csv (optional)
 //     "timestamp, p x y z, q w x y z, v x y z, bw x y z, ba x y z" (quaternion w first)
+//   mav0/depth0/ (optional, not part of the published EuRoC sequences): depth registered to cam0
+//     data.csv    "timestamp [ns], filename" (uint16 PNGs in mav0/depth0/data/, cam0's pixel grid,
+//                 each timestamp equal to a cam0 timestamp; raw / depth_scale = metres, 0 = none)
+//     sensor.yaml depth_scale (raw units per metre), optional registered_to (must be cam0)
 // Header lines start with '#'. sensor.yaml files start with "%YAML:1.0" (OpenCV style), which
 // yaml-cpp rejects: it is turned into a comment before parsing (line numbers are kept).
 
@@ -29,8 +34,11 @@ namespace imumatch {
 // non-numeric or non-finite values, duplicate or out-of-order timestamps.
 ImuBuffer ReadEurocImu(const std::string& path, const ImuBufferOptions& options = {});
 
-// cam0/data.csv -> (timestamp, filename) list, same errors.
+// cam0/data.csv -> (timestamp, filename) list, same errors, and "no images listed" for a list
+// without rows.
 std::vector<StampedFile> ReadEurocImageList(const std::string& path);
+// depth0/data.csv -> (timestamp, filename) list; the same format and errors as ReadEurocImageList.
+std::vector<StampedFile> ReadEurocDepthList(const std::string& path);
 
 // T_BS: pose of the sensor in the body frame, body_from_sensor (p_in_body = T_BS * p_in_sensor).
 struct EurocCameraSensor {
@@ -42,11 +50,19 @@ struct EurocImuSensor {
   ImuParams params;  // noise densities, random walks, rate; gravity left at the default
   Rigid3d body_from_sensor;
 };
+// depth0/sensor.yaml. The depth images share cam0's intrinsics and pose, so there is no T_BS.
+struct EurocDepthSensor {
+  double depth_scale = 1000.0;         // raw units per metre (metres = raw / depth_scale)
+  std::string registered_to = "cam0";  // the only registration supported
+};
 // Throw InputError(path, line, ...) for a missing file, YAML syntax errors, missing keys, values of
 // the wrong shape, an unsupported camera / distortion model, or a T_BS that is not a rigid
 // transform (rotation block not orthonormal within 1e-6 or determinant not +1).
 EurocCameraSensor ReadEurocCameraSensor(const std::string& path);
 EurocImuSensor ReadEurocImuSensor(const std::string& path);
+// Also InputError(path, line, ...) when depth_scale is not a finite number > 0, or registered_to is
+// given and is not "cam0" (depth on another camera's grid would be silently misread).
+EurocDepthSensor ReadEurocDepthSensor(const std::string& path);
 
 // One row of state_groundtruth_estimate0/data.csv.
 struct EurocGroundTruthState {
@@ -59,21 +75,31 @@ struct EurocGroundTruthState {
 std::vector<EurocGroundTruthState> ReadEurocGroundTruth(const std::string& path);
 
 // Everything of a EuRoC sequence that the project uses, from the folder holding mav0/ or the mav0
-// folder itself. The ground truth folder is optional (empty groundtruth when absent).
+// folder itself. The ground truth and depth0 folders are optional (empty groundtruth, no depth0 and
+// no depth_images when absent).
 struct EurocSequence {
   std::string mav0;  // path of the mav0 folder
   EurocCameraSensor cam0;
   EurocImuSensor imu0;
-  std::vector<StampedFile> images;  // paths relative to mav0/cam0/data
+  std::optional<EurocDepthSensor> depth0;  // set when mav0/depth0/ exists
+  std::vector<StampedFile> images;         // paths relative to mav0/cam0/data
+  // Paths relative to mav0/depth0/data; every timestamp is that of an entry of images (checked),
+  // but frames may lack depth.
+  std::vector<StampedFile> depth_images;
   ImuBuffer imu;
   std::vector<EurocGroundTruthState> groundtruth;
   // cam_from_imu = (body_from_cam)^-1 * body_from_imu.
   Rigid3d CamFromImu() const { return cam0.body_from_sensor.Inverse() * imu0.body_from_sensor; }
   std::string ImagePath(const StampedFile& f) const { return mav0 + "/cam0/data/" + f.path; }
+  std::string DepthPath(const StampedFile& f) const { return mav0 + "/depth0/data/" + f.path; }
 };
 // Returns the mav0 folder (normalised, no trailing slash) for a path that is mav0 itself or holds
 // mav0/; empty when neither.
 std::string FindEurocMav0(const std::string& path);
+// Reads the folders above. When mav0/depth0/ exists its sensor.yaml and data.csv are required, and
+// a depth row whose timestamp is not exactly that of a cam0 row is an InputError(depth0/data.csv,
+// line, "depth image at t=... has no cam0 frame"): the depth is registered to one cam0 image, so a
+// nearest-frame match would pair it with the wrong view.
 EurocSequence ReadEurocSequence(const std::string& path, const ImuBufferOptions& options = {});
 
 }  // namespace imumatch

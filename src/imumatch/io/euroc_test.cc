@@ -166,6 +166,87 @@ TEST(Euroc, ImageListErrors) {
   ExpectInputError([&] { ReadEurocImageList(empty); }, empty, 0, "no images");
 }
 
+TEST(Euroc, RealDepthListAndSensor) {
+  const std::string depth0 = DataPath("euroc_mh05_flight/mav0/depth0");
+  const std::vector<StampedFile> list = ReadEurocDepthList(depth0 + "/data.csv");
+  ASSERT_EQ(list.size(), 36u);
+  EXPECT_EQ(list.front().t_ns, 1403638538577829376LL);
+  EXPECT_EQ(list.front().path, "1403638538577829376.png");
+  EXPECT_EQ(list.front().line, 2);  // after the "#timestamp [ns],filename" header
+  const EurocDepthSensor sensor = ReadEurocDepthSensor(depth0 + "/sensor.yaml");
+  EXPECT_DOUBLE_EQ(sensor.depth_scale, 1000.0);
+  EXPECT_EQ(sensor.registered_to, "cam0");
+}
+
+TEST(Euroc, RealSequenceWithAndWithoutDepth) {
+  const EurocSequence seq = ReadEurocSequence(DataPath("euroc_mh05_flight"));
+  ASSERT_TRUE(seq.depth0.has_value());
+  EXPECT_DOUBLE_EQ(seq.depth0->depth_scale, 1000.0);
+  ASSERT_EQ(seq.images.size(), 200u);
+  ASSERT_EQ(seq.depth_images.size(), 36u);
+  // depth0 covers cam0's first 36 frames, timestamp for timestamp.
+  for (size_t i = 0; i < seq.depth_images.size(); ++i) {
+    EXPECT_EQ(seq.depth_images[i].t_ns, seq.images[i].t_ns) << i;
+  }
+  EXPECT_EQ(seq.DepthPath(seq.depth_images[0]),
+            DataPath("euroc_mh05_flight/mav0/depth0/data/1403638538577829376.png"));
+  const EurocSequence no_depth = ReadEurocSequence(DataPath("euroc_v101_excerpt"));
+  EXPECT_FALSE(no_depth.depth0.has_value());
+  EXPECT_TRUE(no_depth.depth_images.empty());
+}
+
+TEST(Euroc, DepthListErrors) {
+  TempDir dir;
+  const std::string header = "#timestamp [ns],filename\n";
+  const std::string ok = dir.Write("ok.csv", header + "1000,a.png\n\n# note\n2000,b.png\n");
+  ASSERT_EQ(ReadEurocDepthList(ok).size(), 2u);
+  EXPECT_EQ(ReadEurocDepthList(ok)[1].line, 5);
+  const std::string malformed = dir.Write("a.csv", header + "1000,a.png\n2000\n");
+  ExpectInputError([&] { ReadEurocDepthList(malformed); }, malformed, 3, "expected 2 fields");
+  const std::string bad_time = dir.Write("b.csv", header + "1.5e9,a.png\n");
+  ExpectInputError([&] { ReadEurocDepthList(bad_time); }, bad_time, 2, "nanoseconds");
+  const std::string dup = dir.Write("c.csv", header + "1000,a.png\n1000,b.png\n");
+  ExpectInputError([&] { ReadEurocDepthList(dup); }, dup, 3, "duplicate");
+  const std::string unsorted = dir.Write("d.csv", header + "2000,b.png\n1000,a.png\n");
+  ExpectInputError([&] { ReadEurocDepthList(unsorted); }, unsorted, 3, "before the previous");
+  const std::string empty = dir.Write("e.csv", header);
+  ExpectInputError([&] { ReadEurocDepthList(empty); }, empty, 0, "no depth images listed");
+  const std::string missing = dir.Path("none.csv");
+  ExpectInputError([&] { ReadEurocDepthList(missing); }, missing, 0, "not found");
+}
+
+TEST(Euroc, DepthSensorYamlErrors) {
+  TempDir dir;
+  // The OpenCV "%YAML:1.0" first line is accepted like in the other sensor.yaml files.
+  const std::string opencv = dir.Write(
+      "ok.yaml", "%YAML:1.0\nsensor_type: depth\nregistered_to: cam0\ndepth_scale: 5000\n");
+  EXPECT_DOUBLE_EQ(ReadEurocDepthSensor(opencv).depth_scale, 5000.0);
+  // registered_to is optional and then means cam0.
+  const std::string implicit = dir.Write("implicit.yaml", "depth_scale: 1000.0\n");
+  EXPECT_EQ(ReadEurocDepthSensor(implicit).registered_to, "cam0");
+  const std::string zero = dir.Write("a.yaml", "sensor_type: depth\ndepth_scale: 0\n");
+  ExpectInputError([&] { ReadEurocDepthSensor(zero); }, zero, 2, "depth_scale must be > 0");
+  const std::string negative = dir.Write("b.yaml", "%YAML:1.0\ndepth_scale: -1000\n");
+  ExpectInputError([&] { ReadEurocDepthSensor(negative); }, negative, 2, "depth_scale must be > 0");
+  const std::string missing_key = dir.Write("c.yaml", "sensor_type: depth\nregistered_to: cam0\n");
+  ExpectInputError([&] { ReadEurocDepthSensor(missing_key); }, missing_key, 0,
+                   "missing key 'depth_scale'");
+  const std::string text = dir.Write("d.yaml", "sensor_type: depth\n\ndepth_scale: mm\n");
+  ExpectInputError([&] { ReadEurocDepthSensor(text); }, text, 3,
+                   "depth_scale: 'mm' is not a number");
+  const std::string nan = dir.Write("e.yaml", "depth_scale: .nan\n");
+  ExpectInputError([&] { ReadEurocDepthSensor(nan); }, nan, 1, "depth_scale");
+  const std::string list = dir.Write("f.yaml", "depth_scale: [1000]\n");
+  ExpectInputError([&] { ReadEurocDepthSensor(list); }, list, 1, "expected a number");
+  const std::string cam1 = dir.Write(
+      "g.yaml", "%YAML:1.0\nsensor_type: depth\nregistered_to: cam1\ndepth_scale: 1000\n");
+  ExpectInputError([&] { ReadEurocDepthSensor(cam1); }, cam1, 3, "registered_to 'cam1'");
+  const std::string not_text = dir.Write("h.yaml", "registered_to: [cam0]\ndepth_scale: 1000\n");
+  ExpectInputError([&] { ReadEurocDepthSensor(not_text); }, not_text, 1, "expected a text value");
+  const std::string none = dir.Path("none.yaml");
+  ExpectInputError([&] { ReadEurocDepthSensor(none); }, none, 0, "not found");
+}
+
 std::string CameraYaml(const std::string& t_bs_row0, const std::string& distortion_model) {
   return "%YAML:1.0\n"            // 1
          "sensor_type: camera\n"  // 2
