@@ -19,6 +19,8 @@ void GuidedMatcherOptions::Check() const {
                  "orientation_tolerance_deg=" << orientation_tolerance_deg);
   IMUMATCH_CHECK(scale_tolerance_factor >= 1.0 && std::isfinite(scale_tolerance_factor),
                  "scale_tolerance_factor=" << scale_tolerance_factor);
+  IMUMATCH_CHECK(duplicate_radius_px >= 0.0 && std::isfinite(duplicate_radius_px),
+                 "duplicate_radius_px=" << duplicate_radius_px);
   IMUMATCH_CHECK(grid_cell_size > 0.0 && std::isfinite(grid_cell_size),
                  "grid_cell_size=" << grid_cell_size);
 }
@@ -60,6 +62,7 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
   MatchResult result;
   MatchStats& stats = result.stats;
   stats.queries = n;
+  result.outcomes.assign(static_cast<size_t>(n), QueryOutcome::kMatched);
   if (n == 0) return result;
 
   const DescriptorNorm norm = descriptors_a.norm;
@@ -95,6 +98,20 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
   std::vector<float> best_cost(n), second_cost(n);
   std::vector<int> candidates;
   candidates.reserve(256);
+  struct Scored {
+    float cost;
+    int k;
+    bool consistent;
+  };
+  std::vector<Scored> scored;
+  scored.reserve(256);
+  const bool dedup = options.duplicate_radius_px > 0.0;
+  const float dup_radius = static_cast<float>(options.duplicate_radius_px);
+  float ref_b = std::numeric_limits<float>::infinity();
+  for (const KeypointInfo& k : keypoints_b) {
+    if (k.size > 0.0f) ref_b = std::min(ref_b, k.size);
+  }
+  if (!std::isfinite(ref_b)) ref_b = 0.0f;
 
   for (int i = 0; i < n; ++i) {
     const KeypointPrediction& p = predictions[i];
@@ -107,12 +124,15 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
         break;
       case PredictionStatus::kBehindCamera:
         ++stats.behind_camera;
+        result.outcomes[i] = QueryOutcome::kBehindCamera;
         continue;
       case PredictionStatus::kOutsideImage:
         ++stats.outside_image;
+        result.outcomes[i] = QueryOutcome::kOutsideImage;
         continue;
       case PredictionStatus::kInvalid:
         ++stats.no_prediction;
+        result.outcomes[i] = QueryOutcome::kNoPrediction;
         continue;
     }
     const KeypointInfo& ka = keypoints_a[i];
@@ -129,6 +149,7 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
     float best = inf, second = inf, rival = inf;
     int best_k = -1;
     int64_t evaluated = 0;
+    scored.clear();
     grid_b.CollectSlotsInBox(p.min_x, p.min_y, p.max_x, p.max_y, &candidates);
     for (const int k : candidates) {
       const KeypointInfo& kb = info_b[k];
@@ -139,17 +160,16 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
       const bool size_ok =
           !(check_size && kb.size > 0.0f && (kb.size < size_lo || kb.size > size_hi));
       if (angle_ok) any_angle_ok = true;
-      if (!(angle_ok && size_ok)) {
-        if (rivals_all) {
-          // An inconsistent candidate cannot be the match but still competes in the ratio test.
-          const float c = cost_fn(da, desc_b.data() + static_cast<size_t>(k) * bytes, bytes);
-          ++evaluated;
-          if (c < rival) rival = c;
-        }
-        continue;
-      }
+      const bool consistent = angle_ok && size_ok;
+      if (!consistent && !rivals_all) continue;
+      // An inconsistent candidate cannot be the match but still competes in the ratio test.
       const float c = cost_fn(da, desc_b.data() + static_cast<size_t>(k) * bytes, bytes);
       ++evaluated;
+      if (dedup) scored.push_back({c, k, consistent});
+      if (!consistent) {
+        if (c < rival) rival = c;
+        continue;
+      }
       if (c < second) {
         if (c < best) {
           second = best;
@@ -164,17 +184,37 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
         reverse_idx[k] = i;
       }
     }
+    if (dedup && best_k >= 0) {
+      // Rivals at the best candidate's own place are the same feature detected twice (another
+      // pyramid level, another orientation): they do not make the match ambiguous.
+      const KeypointInfo& kbest = info_b[best_k];
+      const float scale =
+          ref_b > 0.0f && kbest.size > 0.0f ? std::max(1.0f, kbest.size / ref_b) : 1.0f;
+      const float dup2 = dup_radius * dup_radius * scale * scale;
+      second = rival = inf;
+      for (const Scored& sc : scored) {
+        if (sc.k == best_k) continue;
+        const KeypointInfo& kb = info_b[sc.k];
+        const float dx = kb.x - kbest.x, dy = kb.y - kbest.y;
+        if (dx * dx + dy * dy <= dup2) continue;
+        float& target = sc.consistent ? second : rival;
+        if (sc.cost < target) target = sc.cost;
+      }
+    }
     stats.distances_computed += evaluated;
     if (!any_in_window) {
       ++stats.no_candidate_in_window;
+      result.outcomes[i] = QueryOutcome::kNoCandidateInWindow;
       continue;
     }
     if (!any_angle_ok) {
       ++stats.orientation;
+      result.outcomes[i] = QueryOutcome::kOrientation;
       continue;
     }
     if (best_k < 0) {
       ++stats.scale;
+      result.outcomes[i] = QueryOutcome::kScale;
       continue;
     }
     // The acceptance threshold acts as a virtual second-best: a lone candidate (or one whose
@@ -187,10 +227,12 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
     }
     if (best > max_cost) {
       ++stats.distance_threshold;
+      result.outcomes[i] = QueryOutcome::kDistanceThreshold;
       continue;
     }
     if (use_ratio && !(best < ratio_cost * std::min({second, rival, max_cost}))) {
       ++stats.ratio_test;
+      result.outcomes[i] = QueryOutcome::kRatioTest;
       continue;
     }
     best_slot[i] = best_k;
@@ -204,6 +246,7 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
     if (k < 0) continue;
     if (mutual && reverse_idx[k] != i) {
       ++stats.mutual;
+      result.outcomes[i] = QueryOutcome::kMutual;
       continue;
     }
     Match match;
@@ -218,6 +261,18 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
   return result;
 }
 
+const PixelUndistorter& GuidedMatcherWorkspace::UndistorterFor(const PinholeCamera& camera) {
+  const PinholeCamera& c = undistorter_.camera();
+  const bool same = has_undistorter_ && c.width == camera.width && c.height == camera.height &&
+                    c.fx == camera.fx && c.fy == camera.fy && c.cx == camera.cx &&
+                    c.cy == camera.cy && c.distortion == camera.distortion;
+  if (!same) {
+    undistorter_ = PixelUndistorter(camera);
+    has_undistorter_ = true;
+  }
+  return undistorter_;
+}
+
 MatchResult GuidedMatcherWorkspace::Match(const PinholeCamera& camera, const CameraMotion& motion,
                                           const std::vector<cv::KeyPoint>& keypoints_a,
                                           const cv::Mat& descriptors_a, const cv::Mat& depth_a,
@@ -226,33 +281,42 @@ MatchResult GuidedMatcherWorkspace::Match(const PinholeCamera& camera, const Cam
                                           const PredictionOptions& prediction_options,
                                           const GuidedMatcherOptions& matcher_options) {
   matcher_options.Check();
-  const KeypointPredictor predictor(camera, motion, prediction_options);
+  const PixelUndistorter& undistorter = UndistorterFor(camera);
+  const KeypointPredictor predictor(undistorter, motion, prediction_options);
   const size_t n = keypoints_a.size();
-  info_a_.resize(n);
   predictions_.resize(n);
   const bool has_depth_image = !depth_a.empty();
-  for (size_t i = 0; i < n; ++i) {
-    const cv::KeyPoint& k = keypoints_a[i];
-    info_a_[i] = KeypointInfo{k.pt.x, k.pt.y, k.angle, k.size, k.octave};
-  }
   if (has_depth_image) {
-    depths_ = SampleDepths(depth_a, camera.depth_scale, info_a_, prediction_options.depth_sampling);
+    // Depth is registered to the (distorted) image: sampled at the image positions.
+    depths_ =
+        SampleDepths(depth_a, camera.depth_scale, keypoints_a, prediction_options.depth_sampling);
   }
-  for (size_t i = 0; i < n; ++i) {
-    double sigma_scale = 1.0;
-    if (prediction_options.scale_sigma_with_octave) {
-      const int level = static_cast<int8_t>(info_a_[i].octave & 0xFF);
-      sigma_scale = std::pow(prediction_options.octave_scale, level);
+  // A stream passes each frame twice, as B and then as A: its keypoints were mapped to ideal
+  // pixels in the previous call. Reused when the positions are the very same (a cheap compare).
+  bool reuse = !undistorter.identity() && keypoints_a.size() == last_b_.size();
+  for (size_t i = 0; reuse && i < n; ++i) {
+    reuse = keypoints_a[i].pt == last_b_[i];
+  }
+  if (reuse) {
+    info_a_.swap(info_b_);
+    for (size_t i = 0; i < n; ++i) {
+      info_a_[i].angle_deg = keypoints_a[i].angle;
+      info_a_[i].size = keypoints_a[i].size;
+      info_a_[i].octave = keypoints_a[i].octave;
     }
-    predictions_[i] = predictor.Predict(
-        Eigen::Vector2d(info_a_[i].x, info_a_[i].y),
-        has_depth_image ? depths_[i] : std::numeric_limits<double>::quiet_NaN(), sigma_scale);
+  } else {
+    ToIdealKeypointInfos(keypoints_a, undistorter, &info_a_);
   }
-  info_b_.resize(keypoints_b.size());
-  for (size_t j = 0; j < keypoints_b.size(); ++j) {
-    const cv::KeyPoint& k = keypoints_b[j];
-    info_b_[j] = KeypointInfo{k.pt.x, k.pt.y, k.angle, k.size, k.octave};
+  const float reference = ReferenceKeypointSize(info_a_);
+  for (size_t i = 0; i < n; ++i) {
+    predictions_[i] =
+        predictor.Predict(Eigen::Vector2d(info_a_[i].x, info_a_[i].y),
+                          has_depth_image ? depths_[i] : std::numeric_limits<double>::quiet_NaN(),
+                          KeypointSigmaScale(prediction_options, info_a_[i], reference));
   }
+  ToIdealKeypointInfos(keypoints_b, undistorter, &info_b_);
+  last_b_.resize(keypoints_b.size());
+  for (size_t j = 0; j < keypoints_b.size(); ++j) last_b_[j] = keypoints_b[j].pt;
   grid_.Build(info_b_, camera.width, camera.height,
               static_cast<float>(matcher_options.grid_cell_size));
   return MatchGuided(predictions_, info_a_, DescriptorView::FromMat(descriptors_a), info_b_, grid_,

@@ -31,6 +31,13 @@ struct GuidedMatcherOptions {
   // test. Measured on the demo's seed cases (SIFT, SURF, ORB, AKAZE): guided SURF precision at
   // 1 / 8 px 0.689 / 0.934 -> 0.746 / 0.979, SIFT 0.974 -> 0.979, for 1.3 % fewer correct matches.
   bool inconsistent_candidates_in_ratio = true;
+  // Candidates within duplicate_radius_px x (the best candidate's size / the smallest keypoint size
+  // of B) of the best candidate are not its rivals in the ratio test: they are the same physical
+  // point detected again (ORB finds a corner on several pyramid levels, SIFT gives one point
+  // several orientations), and either is a correct partner. Whole-image brute force cannot tell
+  // such a twin from a distant look-alike and rejects both; the ratio test exists for the
+  // look-alikes. 0 disables.
+  double duplicate_radius_px = 2.0;
   // Reverse pass: keep i -> j only when, among the keypoints of A whose windows contain j and pass
   // the consistency checks, i is the one closest to j.
   bool mutual = false;
@@ -60,7 +67,8 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
                         const DescriptorView& descriptors_b, const GuidedMatcherOptions& options);
 
 // The whole pipeline for one frame pair: depth lookup in A (depth_a may be empty: no depth),
-// prediction, grid over B, matching. Keypoints as OpenCV gives them.
+// keypoints mapped to ideal pixels, prediction, grid over B, matching. Keypoints as OpenCV gives
+// them (image pixels).
 MatchResult MatchFramesGuided(const PinholeCamera& camera, const CameraMotion& motion,
                               const std::vector<cv::KeyPoint>& keypoints_a,
                               const cv::Mat& descriptors_a, const cv::Mat& depth_a,
@@ -69,9 +77,12 @@ MatchResult MatchFramesGuided(const PinholeCamera& camera, const CameraMotion& m
                               const PredictionOptions& prediction_options,
                               const GuidedMatcherOptions& matcher_options);
 
-// Reusable per-frame state for a caller that matches many frames: keeps the keypoint copies,
-// depths, predictions and the grid between calls so their buffers are reused (MatchGuided itself
-// still allocates its O(m) scratch arrays per call).
+// Reusable per-frame state for a caller that matches many frames: keeps the keypoint copies (in
+// ideal pixels), depths, predictions, the grid and the camera's PixelUndistorter between calls so
+// their buffers are reused (MatchGuided itself still allocates its O(m) scratch arrays per call).
+// Predictions and the grid are in ideal pixels (see KeypointPredictor). In a stream (frame B of
+// one call is frame A of the next, with the same keypoint positions) each frame's keypoints are
+// mapped to ideal pixels once.
 class GuidedMatcherWorkspace {
  public:
   MatchResult Match(const PinholeCamera& camera, const CameraMotion& motion,
@@ -81,8 +92,15 @@ class GuidedMatcherWorkspace {
                     const GuidedMatcherOptions& matcher_options);
 
   const std::vector<KeypointPrediction>& predictions() const { return predictions_; }
+  // The keypoints of the last call in ideal pixels.
+  const std::vector<KeypointInfo>& ideal_keypoints_a() const { return info_a_; }
+  const std::vector<KeypointInfo>& ideal_keypoints_b() const { return info_b_; }
 
  private:
+  const PixelUndistorter& UndistorterFor(const PinholeCamera& camera);
+  PixelUndistorter undistorter_;
+  bool has_undistorter_ = false;
+  std::vector<cv::Point2f> last_b_;  // B's positions of the last call (reused as the next A)
   std::vector<KeypointInfo> info_a_, info_b_;
   std::vector<float> depths_;
   std::vector<KeypointPrediction> predictions_;

@@ -1,5 +1,6 @@
 #include "imumatch/matching/guided_matcher.h"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <random>
@@ -112,6 +113,14 @@ Outcome RunMatch(const SyntheticPair& s, const PredictionOptions& po,
     (m.train_idx == s.partner[m.query_idx] ? o.correct : o.wrong)++;
   }
   EXPECT_EQ(o.result.stats.OutcomeSum(), o.result.stats.queries);
+  // The per-query outcomes agree with the counts.
+  EXPECT_EQ(o.result.outcomes.size(), s.kps_a.size());
+  EXPECT_EQ(static_cast<int>(std::count(o.result.outcomes.begin(), o.result.outcomes.end(),
+                                        QueryOutcome::kRatioTest)),
+            o.result.stats.ratio_test);
+  EXPECT_EQ(static_cast<int>(std::count(o.result.outcomes.begin(), o.result.outcomes.end(),
+                                        QueryOutcome::kMatched)),
+            o.result.stats.matched);
   return o;
 }
 
@@ -277,14 +286,41 @@ TEST(GuidedMatcherTest, DistanceThresholdAndRatioTest) {
   // 70 bits are distinctive enough (70 < 71.7).
   SyntheticPair close = MakePair(30, 0, kTrueMotion, Motion(kTrueMotion), 8, /*flipped_bits=*/70);
   EXPECT_EQ(RunMatch(close, PredictionOptions(), GuidedMatcherOptions()).correct, 30);
-  // Ratio: a second candidate next to keypoint 0's partner, with a descriptor as close -> rejected.
+  // Ratio: a second candidate 3 px from keypoint 0's partner (inside its window, outside the
+  // 2 px twin radius), with a descriptor as close -> rejected.
   SyntheticPair r = MakePair(30, 0, kTrueMotion, Motion(kTrueMotion), 8);
-  r.kps_b.push_back(r.kps_b[r.partner[0]]);
+  KeypointInfo rival = r.kps_b[r.partner[0]];
+  rival.x += 3.0f;
+  r.kps_b.push_back(rival);
   const cv::Mat twin = r.desc_b.row(r.partner[0]).clone();  // equal distance: ratio 1
   r.desc_b.push_back(twin);
   const Outcome ro = RunMatch(r, PredictionOptions(), GuidedMatcherOptions());
   EXPECT_EQ(ro.result.stats.ratio_test, 1);
   EXPECT_EQ(ro.correct, 29);
+  EXPECT_EQ(ro.result.outcomes[0], QueryOutcome::kRatioTest);
+}
+
+TEST(GuidedMatcherTest, ATwinAtThePartnersPlaceIsNoRival) {
+  // The same point detected twice (another pyramid level): a second keypoint 1 px from keypoint
+  // 0's partner with the same descriptor. Brute force's ratio test cannot tell it from a distant
+  // look-alike; guided matching sees that both sit at one place and keeps the match.
+  SyntheticPair r = MakePair(30, 0, kTrueMotion, Motion(kTrueMotion), 8);
+  KeypointInfo twin = r.kps_b[r.partner[0]];
+  twin.x += 1.0f;
+  r.kps_b.push_back(twin);
+  r.desc_b.push_back(r.desc_b.row(r.partner[0]).clone());
+  const Outcome kept = RunMatch(r, PredictionOptions(), GuidedMatcherOptions());
+  EXPECT_EQ(kept.result.stats.ratio_test, 0);
+  EXPECT_EQ(kept.result.stats.matched, 30);
+  // Query 0 went to the partner or its twin, both at the true place.
+  for (const Match& m : kept.result.matches) {
+    if (m.query_idx != 0) continue;
+    EXPECT_TRUE(m.train_idx == r.partner[0] || m.train_idx == static_cast<int>(r.kps_b.size()) - 1);
+  }
+  GuidedMatcherOptions classic;
+  classic.duplicate_radius_px = 0.0;
+  const Outcome strict = RunMatch(r, PredictionOptions(), classic);
+  EXPECT_EQ(strict.result.stats.ratio_test, 1);
 }
 
 TEST(GuidedMatcherTest, InconsistentCandidatesStillCompeteInTheRatioTest) {
@@ -298,6 +334,7 @@ TEST(GuidedMatcherTest, InconsistentCandidatesStillCompeteInTheRatioTest) {
   r.kps_b.push_back(twin);
   r.desc_b.push_back(r.desc_b.row(r.partner[0]).clone());
   GuidedMatcherOptions mo;
+  mo.duplicate_radius_px = 0.0;  // the twin sits at the partner's place: not a rival otherwise
   const Outcome strict = RunMatch(r, PredictionOptions(), mo);
   EXPECT_EQ(strict.result.stats.ratio_test, 1);
   EXPECT_EQ(strict.correct, 29);

@@ -25,6 +25,32 @@ int MatchStats::OutcomeSum() const {
          scale + distance_threshold + ratio_test + mutual + matched;
 }
 
+const char* ToString(QueryOutcome outcome) {
+  switch (outcome) {
+    case QueryOutcome::kMatched:
+      return "matched";
+    case QueryOutcome::kNoPrediction:
+      return "no_prediction";
+    case QueryOutcome::kBehindCamera:
+      return "behind_camera";
+    case QueryOutcome::kOutsideImage:
+      return "outside_image";
+    case QueryOutcome::kNoCandidateInWindow:
+      return "no_candidate_in_window";
+    case QueryOutcome::kOrientation:
+      return "orientation";
+    case QueryOutcome::kScale:
+      return "scale";
+    case QueryOutcome::kDistanceThreshold:
+      return "distance_threshold";
+    case QueryOutcome::kRatioTest:
+      return "ratio_test";
+    case QueryOutcome::kMutual:
+      return "mutual";
+  }
+  return "?";
+}
+
 std::string MatchStats::ToString() const {
   std::ostringstream out;
   out << "queries=" << queries << " (depth " << predicted_with_depth << ", no-depth "

@@ -31,6 +31,9 @@ struct Match {
   float distance = 0.0f;
   float second_distance = std::numeric_limits<float>::infinity();
   Eigen::Vector2f predicted_uv = Eigen::Vector2f::Constant(std::numeric_limits<float>::quiet_NaN());
+  // The matched position in B refined to sub-pixel accuracy against A's patch (image pixels;
+  // RefineMatches), NaN when not refined: the keypoint of B is then the matched position.
+  Eigen::Vector2f refined_uv_b = Eigen::Vector2f::Constant(std::numeric_limits<float>::quiet_NaN());
 };
 
 std::vector<cv::DMatch> ToDMatches(const std::vector<Match>& matches);
@@ -60,9 +63,25 @@ struct MatchStats {
   std::string ToString() const;
 };
 
+// How one query of the guided matcher ended (the per-query form of MatchStats' outcomes).
+enum class QueryOutcome : uint8_t {
+  kMatched,
+  kNoPrediction,
+  kBehindCamera,
+  kOutsideImage,
+  kNoCandidateInWindow,
+  kOrientation,
+  kScale,
+  kDistanceThreshold,
+  kRatioTest,
+  kMutual,
+};
+const char* ToString(QueryOutcome outcome);
+
 struct MatchResult {
   std::vector<Match> matches;
   MatchStats stats;
+  std::vector<QueryOutcome> outcomes;  // guided matcher: one per query keypoint
   std::vector<cv::DMatch> ToDMatches() const { return imumatch::ToDMatches(matches); }
 };
 

@@ -57,6 +57,10 @@ void PredictionOptions::Check() const {
                  "depth_noise_coeff=" << depth_noise_coeff);
   IMUMATCH_CHECK(std::isfinite(keypoint_sigma_px) && keypoint_sigma_px >= 0.0,
                  "keypoint_sigma_px=" << keypoint_sigma_px);
+  IMUMATCH_CHECK(sigma_scaling == KeypointSigmaScaling::kNone ||
+                     sigma_scaling == KeypointSigmaScaling::kSize ||
+                     sigma_scaling == KeypointSigmaScaling::kOctave,
+                 "sigma_scaling");
   IMUMATCH_CHECK(std::isfinite(octave_scale) && octave_scale >= 1.0,
                  "octave_scale=" << octave_scale);
   IMUMATCH_CHECK(gate_probability > 0.0 && gate_probability < 1.0,
@@ -101,16 +105,69 @@ KeypointPredictor::KeypointPredictor(const PinholeCamera& camera, const CameraMo
                                      const PredictionOptions& options)
     : camera_(camera), options_(options) {
   camera.Check();
-  options.Check();
+  distorted_ = camera.HasDistortion();
+  if (distorted_) {
+    // The ideal image's bounding box from its border, every 4 px (the box only bounds the search
+    // regions; the exact test is done on the distorted position).
+    min_x_ = min_y_ = std::numeric_limits<double>::infinity();
+    max_x_ = max_y_ = -std::numeric_limits<double>::infinity();
+    auto extend = [&](double u, double v) {
+      const Eigen::Vector2d p = camera.PixelToIdeal(Eigen::Vector2d(u, v));
+      min_x_ = std::min(min_x_, p.x());
+      max_x_ = std::max(max_x_, p.x());
+      min_y_ = std::min(min_y_, p.y());
+      max_y_ = std::max(max_y_, p.y());
+    };
+    const double w = camera.width - 0.5, h = camera.height - 0.5;
+    for (double u = -0.5; u < w; u += 4.0) {
+      extend(u, -0.5);
+      extend(u, h);
+    }
+    for (double v = -0.5; v < h; v += 4.0) {
+      extend(-0.5, v);
+      extend(w, v);
+    }
+    extend(w, h);
+  } else {
+    max_x_ = camera.width - 0.5;
+    max_y_ = camera.height - 0.5;
+  }
+  Init(motion);
+}
+
+KeypointPredictor::KeypointPredictor(const PixelUndistorter& undistorter,
+                                     const CameraMotion& motion, const PredictionOptions& options)
+    : camera_(undistorter.camera()), undistorter_(&undistorter), options_(options) {
+  camera_.Check();
+  distorted_ = !undistorter.identity();
+  min_x_ = undistorter.ideal_min_x();
+  min_y_ = undistorter.ideal_min_y();
+  max_x_ = undistorter.ideal_max_x();
+  max_y_ = undistorter.ideal_max_y();
+  Init(motion);
+}
+
+void KeypointPredictor::Init(const CameraMotion& motion) {
+  options_.Check();
   IMUMATCH_CHECK(motion.covariance.allFinite(), "motion covariance is not finite");
   r_ = motion.cam_b_from_cam_a.RotationMatrix();
   t_ = motion.cam_b_from_cam_a.translation;
-  r_col0_fx_ = r_.col(0) / camera.fx;
-  r_col1_fy_ = r_.col(1) / camera.fy;
+  r_col0_fx_ = r_.col(0) / camera_.fx;
+  r_col1_fy_ = r_.col(1) / camera_.fy;
   IMUMATCH_CHECK(r_.allFinite() && t_.allFinite(), "motion is not finite");
   motion_cov_ = motion.covariance;
   has_motion_cov_ = !motion_cov_.isZero(0.0);
-  chi2_ = options.GateChiSquare();
+  chi2_ = options_.GateChiSquare();
+}
+
+Eigen::Matrix2d KeypointPredictor::PixelNoise(const Eigen::Vector2d& uv,
+                                              double pixel_variance) const {
+  if (!distorted_) return pixel_variance * Eigen::Matrix2d::Identity();
+  if (undistorter_ != nullptr) {
+    return pixel_variance * undistorter_->NoiseStretchAt(uv.x(), uv.y()).cast<double>();
+  }
+  const Eigen::Matrix2d m = camera_.IdealFromPixelJacobian(uv);
+  return pixel_variance * m * m.transpose();
 }
 
 Eigen::Vector2d KeypointPredictor::PinholeProject(const Eigen::Vector3d& q) const {
@@ -124,10 +181,10 @@ Eigen::Matrix3d KeypointPredictor::InfiniteHomography() const {
 }
 
 Eigen::Vector2d KeypointPredictor::RotationOnly(const Eigen::Vector2d& uv_a) const {
-  const Eigen::Vector2d xy = camera_.PixelToNormalized(uv_a);
+  const Eigen::Vector2d xy = camera_.IdealToNormalized(uv_a);
   const Eigen::Vector3d rx = r_ * Eigen::Vector3d(xy.x(), xy.y(), 1.0);
   if (!(rx.z() > kMinForwardDepth)) return Eigen::Vector2d::Constant(std::nan(""));
-  return camera_.NormalizedToPixel(rx.head<2>() / rx.z());
+  return PinholeProject(rx);
 }
 
 // q = R x + rho t is the point in B up to the positive factor z (x = [x y 1], rho = 1/z); its pixel
@@ -135,9 +192,11 @@ Eigen::Vector2d KeypointPredictor::RotationOnly(const Eigen::Vector2d& uv_a) con
 //   dq/dtheta = -Hat(R x),  dq/dt = rho I,  dq/drho = t,  dq/du_a = R e1 / fx,  dq/dv_a = R e2 /
 //   fy.
 // sigma_rho = sigma_z / z^2 (= depth_noise_coeff for the quadratic Kinect model). The keypoint's
-// localisation noise in B adds pixel_variance * I.
+// localisation noise in A enters through dq/du_a, dq/dv_a; B's adds pixel_cov_b.
 Eigen::Matrix2d KeypointPredictor::Covariance(const Eigen::Vector3d& rx, double rho,
-                                              double rho_variance, double pixel_variance) const {
+                                              double rho_variance,
+                                              const Eigen::Matrix2d& pixel_cov_a,
+                                              const Eigen::Matrix2d& pixel_cov_b) const {
   const Eigen::Vector3d q = rx + rho * t_;
   const double iz = 1.0 / q.z();
   const double u = q.x() * iz, w = q.y() * iz;
@@ -148,10 +207,10 @@ Eigen::Matrix2d KeypointPredictor::Covariance(const Eigen::Vector3d& rx, double 
   };
   const Eigen::Vector2d jt = dpi(t_);
   const Eigen::Vector2d a0 = dpi(r_col0_fx_), a1 = dpi(r_col1_fy_);
-  Eigen::Matrix2d c = rho_variance * jt * jt.transpose();
-  c.noalias() += pixel_variance * (a0 * a0.transpose() + a1 * a1.transpose());
-  c(0, 0) += pixel_variance;
-  c(1, 1) += pixel_variance;
+  Eigen::Matrix2d a;
+  a << a0, a1;
+  Eigen::Matrix2d c = rho_variance * jt * jt.transpose() + pixel_cov_b;
+  c.noalias() += a * pixel_cov_a * a.transpose();
   if (has_motion_cov_) {
     Eigen::Matrix<double, 2, 3> jp;
     jp << camera_.fx * iz, 0.0, -camera_.fx * u * iz, 0.0, camera_.fy * iz, -camera_.fy * w * iz;
@@ -195,17 +254,20 @@ void KeypointPredictor::SetOrientation(const Eigen::Vector3d& q, KeypointPredict
   const Eigen::Vector2d a0 = dpi(r_.col(0)) / camera_.fx;
   const Eigen::Vector2d a1 = dpi(r_.col(1)) / camera_.fy;
   p.angle_change_deg = static_cast<float>(std::atan2(a0.y() - a1.x(), a0.x() + a1.y()) * kRadToDeg);
+  p.local_affine << static_cast<float>(a0.x()), static_cast<float>(a1.x()),
+      static_cast<float>(a0.y()), static_cast<float>(a1.y());
 }
 
 KeypointPrediction KeypointPredictor::Predict(const Eigen::Vector2d& uv_a, double depth_m,
                                               double sigma_scale) const {
   KeypointPrediction p;
   if (!uv_a.allFinite() || !std::isfinite(sigma_scale)) return p;
-  const Eigen::Vector2d xy = camera_.PixelToNormalized(uv_a);
+  const Eigen::Vector2d xy = camera_.IdealToNormalized(uv_a);
   const Eigen::Vector3d xa(xy.x(), xy.y(), 1.0);
   const Eigen::Vector3d rx = r_ * xa;
   const double sigma_px = options_.keypoint_sigma_px * sigma_scale;
   const double pixel_var = sigma_px * sigma_px;
+  const Eigen::Matrix2d pixel_cov_a = PixelNoise(uv_a, pixel_var);
   const double range_a = xa.norm();  // |p_a| / z
 
   const bool has_depth =
@@ -217,18 +279,22 @@ KeypointPrediction KeypointPredictor::Predict(const Eigen::Vector2d& uv_a, doubl
       p.status = PredictionStatus::kBehindCamera;
       return p;
     }
-    const Eigen::Vector2d uv = camera_.HasDistortion()
-                                   ? camera_.NormalizedToPixel(q.head<2>() / q.z())
-                                   : PinholeProject(q);
+    const Eigen::Vector2d uv = PinholeProject(q);
     p.uv = uv.cast<float>();
     p.segment_start = p.segment_end = p.uv;
-    if (!camera_.IsInside(uv)) {
+    // Inside image B: tested on the distorted position (the ideal image is not a rectangle).
+    const bool inside = distorted_
+                            ? (uv.x() >= min_x_ && uv.x() <= max_x_ && uv.y() >= min_y_ &&
+                               uv.y() <= max_y_ && camera_.IsInside(camera_.IdealToPixel(uv)))
+                            : camera_.IsInside(uv);
+    if (!inside) {
       p.status = PredictionStatus::kOutsideImage;
       return p;
     }
     p.status = PredictionStatus::kWithDepth;
     const double sigma_rho = options_.depth_noise_coeff;  // sigma_z / z^2 with sigma_z = c z^2
-    SetWindow(Covariance(rx, rho, sigma_rho * sigma_rho, pixel_var), p);
+    SetWindow(Covariance(rx, rho, sigma_rho * sigma_rho, pixel_cov_a, PixelNoise(uv, pixel_var)),
+              p);
     SetOrientation(q, p);
     p.scale_min = p.scale_max = static_cast<float>(range_a / q.norm());
     return p;
@@ -254,15 +320,16 @@ KeypointPrediction KeypointPredictor::Predict(const Eigen::Vector2d& uv_a, doubl
   const Eigen::Vector3d q_near = rx + rho_hi * t_;  // the z_min end
   const Eigen::Vector3d q_far = rx + rho_lo * t_;   // the z_max end
   Eigen::Vector2d e0 = PinholeProject(q_near), e1 = PinholeProject(q_far);
-  if (!ClipSegment(e0, e1, -0.5, -0.5, camera_.width - 0.5, camera_.height - 0.5)) {
+  if (!ClipSegment(e0, e1, min_x_, min_y_, max_x_, max_y_)) {
     p.status = PredictionStatus::kOutsideImage;
     return p;
   }
   p.status = PredictionStatus::kWithoutDepth;
   p.segment_start = e0.cast<float>();
   p.segment_end = e1.cast<float>();
-  const Eigen::Matrix2d c_near = Covariance(rx, rho_hi, 0.0, pixel_var);
-  const Eigen::Matrix2d c_far = Covariance(rx, rho_lo, 0.0, pixel_var);
+  const Eigen::Matrix2d c_near =
+      Covariance(rx, rho_hi, 0.0, pixel_cov_a, PixelNoise(e0, pixel_var));
+  const Eigen::Matrix2d c_far = Covariance(rx, rho_lo, 0.0, pixel_cov_a, PixelNoise(e1, pixel_var));
   const double l_near = MaxEigenvalue(c_near), l_far = MaxEigenvalue(c_far);
   p.covariance = (l_near >= l_far ? c_near : c_far).cast<float>();
   double r = options_.fixed_half_size;
@@ -275,34 +342,100 @@ KeypointPrediction KeypointPredictor::Predict(const Eigen::Vector2d& uv_a, doubl
   p.max_x = static_cast<float>(std::max(e0.x(), e1.x()) + r);
   p.min_y = static_cast<float>(std::min(e0.y(), e1.y()) - r);
   p.max_y = static_cast<float>(std::max(e0.y(), e1.y()) + r);
-  SetOrientation(rx + 0.5 * (rho_lo + rho_hi) * t_, p);
+  // The patch's rotation at the far end: the IMU's rotation alone for distant points, and
+  // the near end (0.1 m by default) would warp most patches by a parallax they do not have.
+  SetOrientation(rx + rho_lo * t_, p);
   const double s_near = range_a / q_near.norm(), s_far = range_a / q_far.norm();
   p.scale_min = static_cast<float>(std::min(s_near, s_far));
   p.scale_max = static_cast<float>(std::max(s_near, s_far));
   return p;
 }
 
+float ReferenceKeypointSize(const std::vector<KeypointInfo>& keypoints) {
+  float ref = std::numeric_limits<float>::infinity();
+  for (const KeypointInfo& k : keypoints) {
+    if (k.size > 0.0f && k.size < ref) ref = k.size;
+  }
+  return std::isfinite(ref) ? ref : 0.0f;
+}
+
+double KeypointSigmaScale(const PredictionOptions& options, const KeypointInfo& keypoint,
+                          float reference_size) {
+  switch (options.sigma_scaling) {
+    case KeypointSigmaScaling::kNone:
+      return 1.0;
+    case KeypointSigmaScaling::kSize: {
+      if (!(keypoint.size > 0.0f && reference_size > 0.0f && options.keypoint_sigma_px > 0.0)) {
+        return 1.0;
+      }
+      // The detector's grid at scale s has a step of s px: rounding to it adds a uniform error of
+      // variance s^2 / 12 per axis to the base sigma (s = 1 adds nothing by definition).
+      const double s = std::max(1.0, static_cast<double>(keypoint.size) / reference_size);
+      const double base2 = options.keypoint_sigma_px * options.keypoint_sigma_px;
+      return std::sqrt(1.0 + (s * s - 1.0) / (12.0 * base2));
+    }
+    case KeypointSigmaScaling::kOctave:
+      return std::pow(options.octave_scale, static_cast<int8_t>(keypoint.octave & 0xFF));
+  }
+  return 1.0;
+}
+
+void ToIdealKeypointInfos(const std::vector<cv::KeyPoint>& keypoints,
+                          const PixelUndistorter& undistorter, std::vector<KeypointInfo>* out) {
+  out->resize(keypoints.size());
+  const bool identity = undistorter.identity();
+  for (size_t i = 0; i < keypoints.size(); ++i) {
+    const cv::KeyPoint& k = keypoints[i];
+    KeypointInfo& info = (*out)[i];
+    info = KeypointInfo{k.pt.x, k.pt.y, k.angle, k.size, k.octave};
+    if (!identity) {
+      const Eigen::Vector2d ideal = undistorter.ToIdeal(Eigen::Vector2d(k.pt.x, k.pt.y));
+      info.x = static_cast<float>(ideal.x());
+      info.y = static_cast<float>(ideal.y());
+    }
+  }
+}
+
+std::vector<KeypointInfo> ToIdealKeypointInfos(const std::vector<cv::KeyPoint>& keypoints,
+                                               const PixelUndistorter& undistorter) {
+  std::vector<KeypointInfo> out;
+  ToIdealKeypointInfos(keypoints, undistorter, &out);
+  return out;
+}
+
+namespace {
+std::vector<KeypointPrediction> PredictAll(const KeypointPredictor& predictor,
+                                           const std::vector<KeypointInfo>& keypoints,
+                                           const std::vector<float>& depths_m,
+                                           const PredictionOptions& options) {
+  IMUMATCH_CHECK(depths_m.empty() || depths_m.size() == keypoints.size(),
+                 depths_m.size() << " depths for " << keypoints.size() << " keypoints");
+  std::vector<KeypointPrediction> out(keypoints.size());
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float reference = ReferenceKeypointSize(keypoints);
+  for (size_t i = 0; i < keypoints.size(); ++i) {
+    const KeypointInfo& k = keypoints[i];
+    out[i] = predictor.Predict(Eigen::Vector2d(k.x, k.y), depths_m.empty() ? nan : depths_m[i],
+                               KeypointSigmaScale(options, k, reference));
+  }
+  return out;
+}
+}  // namespace
+
 std::vector<KeypointPrediction> PredictKeypoints(const PinholeCamera& camera,
                                                  const CameraMotion& motion,
                                                  const std::vector<KeypointInfo>& keypoints,
                                                  const std::vector<float>& depths_m,
                                                  const PredictionOptions& options) {
-  IMUMATCH_CHECK(depths_m.empty() || depths_m.size() == keypoints.size(),
-                 depths_m.size() << " depths for " << keypoints.size() << " keypoints");
-  const KeypointPredictor predictor(camera, motion, options);
-  std::vector<KeypointPrediction> out(keypoints.size());
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  for (size_t i = 0; i < keypoints.size(); ++i) {
-    const KeypointInfo& k = keypoints[i];
-    double sigma_scale = 1.0;
-    if (options.scale_sigma_with_octave) {
-      const int level = static_cast<int8_t>(k.octave & 0xFF);
-      sigma_scale = std::pow(options.octave_scale, level);
-    }
-    out[i] = predictor.Predict(Eigen::Vector2d(k.x, k.y), depths_m.empty() ? nan : depths_m[i],
-                               sigma_scale);
-  }
-  return out;
+  return PredictAll(KeypointPredictor(camera, motion, options), keypoints, depths_m, options);
+}
+
+std::vector<KeypointPrediction> PredictKeypoints(const PixelUndistorter& undistorter,
+                                                 const CameraMotion& motion,
+                                                 const std::vector<KeypointInfo>& keypoints,
+                                                 const std::vector<float>& depths_m,
+                                                 const PredictionOptions& options) {
+  return PredictAll(KeypointPredictor(undistorter, motion, options), keypoints, depths_m, options);
 }
 
 namespace {

@@ -1,6 +1,8 @@
 #include "imumatch/matching/predictor.h"
 
+#include <algorithm>
 #include <cmath>
+#include <optional>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -154,6 +156,94 @@ TEST(PredictorTest, EpipolarSegmentContainsTrueProjectionForDepthsInRange) {
   }
   EXPECT_GT(tested, 150);
   EXPECT_EQ(inside, tested);
+}
+
+// EuRoC MH_05 cam0: a strong barrel lens (k1 = -0.28).
+PinholeCamera EurocCam0() {
+  PinholeCamera c;
+  c.width = 752;
+  c.height = 480;
+  c.fx = 458.654;
+  c.fy = 457.296;
+  c.cx = 367.215;
+  c.cy = 248.375;
+  c.distortion = {-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05, 0.0};
+  return c;
+}
+
+TEST(PredictorTest, DistortedLensPredictsInIdealPixels) {
+  // Points at random depths seen through the EuRoC lens: the truth is the camera model's own
+  // projection. In ideal pixels it lies on the straight epipolar segment; in image pixels the
+  // same points bend away from any straight segment by several pixels near the borders, which is
+  // why the predictor and the grid work in ideal pixels.
+  const PinholeCamera cam = EurocCam0();
+  const PixelUndistorter undistorter(cam);
+  const CameraMotion motion = MakeMotion(FromEulerZYX(0.02, 0.01, -0.015), {0.12, 0.03, 0.04});
+  const KeypointPredictor predictor(undistorter, motion, PredictionOptions());
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> uu(5, 747), uv(5, 475), uz(0.5, 20.0);
+  int tested = 0, inside = 0, off_in_image_pixels = 0;
+  double worst_depth_error = 0.0;
+  for (int k = 0; k < 400; ++k) {
+    const Eigen::Vector2d pix_a(uu(rng), uv(rng));
+    const double z = uz(rng);
+    const Eigen::Vector3d p_b = motion.cam_b_from_cam_a * cam.Unproject(pix_a, z);
+    const std::optional<Eigen::Vector2d> pix_b = cam.Project(p_b);
+    if (!pix_b || !cam.IsInside(*pix_b)) continue;
+    ++tested;
+    const Eigen::Vector2d ideal_a = undistorter.ToIdeal(pix_a);
+    const Eigen::Vector2d ideal_b = undistorter.ToIdeal(*pix_b);
+    // With depth: the prediction is the truth (ideal pixels) and maps back onto the image point.
+    const KeypointPrediction d = predictor.Predict(ideal_a, z);
+    ASSERT_EQ(d.status, PredictionStatus::kWithDepth);
+    worst_depth_error = std::max(worst_depth_error, (d.uv.cast<double>() - ideal_b).norm());
+    EXPECT_LT((undistorter.ToImage(d.uv.cast<double>()) - *pix_b).norm(), 1e-3);
+    // Without depth: the capsule holds the truth.
+    const KeypointPrediction e = predictor.Predict(ideal_a, std::nan(""));
+    ASSERT_EQ(e.status, PredictionStatus::kWithoutDepth);
+    EXPECT_LT(std::sqrt(e.SegmentDistanceSquared(ideal_b.x(), ideal_b.y())), 1e-2);
+    inside += e.Contains(static_cast<float>(ideal_b.x()), static_cast<float>(ideal_b.y()));
+    // The same segment drawn between the image-pixel ends misses the image-pixel truth.
+    KeypointPrediction naive = e;
+    naive.segment_start = undistorter.ToImage(e.segment_start.cast<double>()).cast<float>();
+    naive.segment_end = undistorter.ToImage(e.segment_end.cast<double>()).cast<float>();
+    off_in_image_pixels +=
+        naive.SegmentDistanceSquared(static_cast<float>(pix_b->x()),
+                                     static_cast<float>(pix_b->y())) > 2.0f * 2.0f;
+  }
+  EXPECT_GT(tested, 250);
+  EXPECT_LT(worst_depth_error, 1e-3);
+  EXPECT_EQ(inside, tested);
+  EXPECT_GT(off_in_image_pixels, tested / 40);  // measured: 15 of 383 more than 2 px off
+}
+
+TEST(PredictorTest, KeypointNoiseGrowsWithSizeAndTowardsTheLensBorder) {
+  const PinholeCamera cam = EurocCam0();
+  const PixelUndistorter undistorter(cam);
+  const CameraMotion motion = MakeMotion(Eigen::Quaterniond::Identity(), {0.05, 0.0, 0.0});
+  PredictionOptions options;
+  const KeypointPredictor predictor(undistorter, motion, options);
+  // kSize: a keypoint 4x the frame's smallest size sits on a 4 px grid: sigma^2 = 1 + 15 / 12.
+  std::vector<KeypointInfo> kps(2);
+  kps[0].size = 31.0f;
+  kps[1].size = 124.0f;
+  const float ref = ReferenceKeypointSize(kps);
+  EXPECT_FLOAT_EQ(ref, 31.0f);
+  EXPECT_DOUBLE_EQ(KeypointSigmaScale(options, kps[1], ref), std::sqrt(1.0 + 15.0 / 12.0));
+  EXPECT_DOUBLE_EQ(KeypointSigmaScale(options, kps[0], ref), 1.0);
+  options.sigma_scaling = KeypointSigmaScaling::kNone;
+  EXPECT_DOUBLE_EQ(KeypointSigmaScale(options, kps[1], ref), 1.0);
+  options.sigma_scaling = KeypointSigmaScaling::kOctave;
+  options.octave_scale = 2.0;
+  kps[1].octave = 3;
+  EXPECT_DOUBLE_EQ(KeypointSigmaScale(options, kps[1], ref), 8.0);
+  // Zero motion noise: the window is the keypoint noise of both frames, in ideal pixels. At the
+  // centre it is the image-pixel sigma; near a corner a barrel lens stretches it.
+  const KeypointPrediction centre =
+      predictor.Predict(undistorter.ToIdeal({cam.cx, cam.cy}), 5.0, 3.0);
+  EXPECT_NEAR(centre.covariance(0, 0), 2.0 * 9.0, 0.2);  // A and B, sigma 3 px each
+  const KeypointPrediction corner = predictor.Predict(undistorter.ToIdeal({30.0, 30.0}), 5.0, 3.0);
+  EXPECT_GT(corner.covariance.trace(), 1.3 * centre.covariance.trace());
 }
 
 TEST(PredictorTest, CovarianceMatchesMonteCarloAndSizesTheWindow) {

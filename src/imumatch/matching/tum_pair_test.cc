@@ -147,11 +147,10 @@ TEST(TumPairTest, GuidedBeatsKnnRatioForOrb) {
   Print("guided (uncertainty window)", sg);
   Print("guided + mutual", Judge(guided_mutual.matches, f, camera));
   Print("guided, fixed +-10 px window", Judge(guided_fixed.matches, f, camera));
-  PredictionOptions octave;
-  octave.scale_sigma_with_octave = true;
-  octave.octave_scale = 1.2;  // ORB: octave = pyramid level
-  Print("guided, pixel sigma x 1.2^level",
-        Judge(Guided(f, camera, GuidedMatcherOptions(), octave).matches, f, camera));
+  PredictionOptions flat;
+  flat.sigma_scaling = KeypointSigmaScaling::kNone;
+  Print("guided, one pixel sigma for all sizes",
+        Judge(Guided(f, camera, GuidedMatcherOptions(), flat).matches, f, camera));
   std::printf("  guided stats: %s\n", guided.stats.ToString().c_str());
   EXPECT_GT(sg.correct8, sk.correct8);
   EXPECT_GE(sg.Precision8(), sk.Precision8() - 1.0);
@@ -168,7 +167,7 @@ TEST(TumPairTest, GuidedBeatsKnnRatioForSift) {
   Print("BFMatcher knnMatch(k=2) + ratio 0.8", sk);
   Print("guided (uncertainty window)", sg);
   PredictionOptions octave;
-  octave.scale_sigma_with_octave = true;
+  octave.sigma_scaling = KeypointSigmaScaling::kOctave;
   octave.octave_scale = 2.0;  // SIFT: signed octave index in the low byte
   Print("guided, pixel sigma x 2^octave",
         Judge(Guided(f, camera, GuidedMatcherOptions(), octave).matches, f, camera));

@@ -1,0 +1,163 @@
+#include "imumatch/matching/subpixel_refinement.h"
+
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "imumatch/core/error.h"
+
+namespace imumatch {
+namespace {
+
+// A smooth random texture (blurred noise), 8-bit.
+cv::Mat Texture(int seed) {
+  cv::Mat noise(240, 320, CV_32F);
+  cv::RNG rng(static_cast<uint64_t>(seed));
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, 1.0);
+  cv::GaussianBlur(noise, noise, cv::Size(0, 0), 2.0);
+  cv::normalize(noise, noise, 20, 235, cv::NORM_MINMAX);
+  cv::Mat out;
+  noise.convertTo(out, CV_8U);
+  return out;
+}
+
+// B = A moved by the similarity p_b = centre + s R(angle) (p_a - centre) + shift (cv::warpAffine
+// with the inverse map, bilinear): the truth for every point of A.
+struct Warped {
+  cv::Mat b;
+  Eigen::Matrix2d a;
+  Eigen::Vector2d t;
+  Eigen::Vector2d Map(const Eigen::Vector2d& p) const { return a * p + t; }
+};
+Warped Warp(const cv::Mat& img, double angle_deg, double scale, const Eigen::Vector2d& shift) {
+  const double th = angle_deg * M_PI / 180.0;
+  Warped w;
+  w.a << scale * std::cos(th), -scale * std::sin(th), scale * std::sin(th), scale * std::cos(th);
+  const Eigen::Vector2d centre(160.0, 120.0);
+  w.t = centre - w.a * centre + shift;
+  cv::Mat m =
+      (cv::Mat_<double>(2, 3) << w.a(0, 0), w.a(0, 1), w.t.x(), w.a(1, 0), w.a(1, 1), w.t.y());
+  cv::warpAffine(img, w.b, m, img.size(), cv::INTER_CUBIC, cv::BORDER_REFLECT);
+  return w;
+}
+
+struct MatchSet {
+  std::vector<cv::KeyPoint> kps_a, kps_b;
+  std::vector<Match> matches;
+  std::vector<Eigen::Vector2d> truth;
+};
+// Keypoints of A on whole pixels; their partners in B rounded to whole pixels (a detector's
+// grid), up to 0.7 px from the truth.
+MatchSet MakeMatches(const Warped& w) {
+  MatchSet s;
+  for (int y = 50; y <= 190; y += 20) {
+    for (int x = 50; x <= 270; x += 20) {
+      const Eigen::Vector2d truth = w.Map(Eigen::Vector2d(x, y));
+      s.kps_a.emplace_back(cv::Point2f(static_cast<float>(x), static_cast<float>(y)), 7.0f);
+      s.kps_b.emplace_back(cv::Point2f(static_cast<float>(std::round(truth.x())),
+                                       static_cast<float>(std::round(truth.y()))),
+                           7.0f);
+      Match m;
+      m.query_idx = m.train_idx = static_cast<int>(s.truth.size());
+      s.matches.push_back(m);
+      s.truth.push_back(truth);
+    }
+  }
+  return s;
+}
+
+PinholeCamera Camera() {
+  PinholeCamera c;
+  c.width = 320;
+  c.height = 240;
+  return c;
+}
+
+double MeanError(const MatchSet& s, int* refined) {
+  double sum = 0.0;
+  *refined = 0;
+  for (size_t i = 0; i < s.matches.size(); ++i) {
+    if (!s.matches[i].refined_uv_b.allFinite()) continue;
+    ++*refined;
+    sum += (s.matches[i].refined_uv_b.cast<double>() - s.truth[i]).norm();
+  }
+  return *refined > 0 ? sum / *refined : 1e9;
+}
+
+TEST(SubpixelRefinement, RecoversASubPixelShift) {
+  const cv::Mat a = Texture(7);
+  const Warped w = Warp(a, 0.0, 1.0, Eigen::Vector2d(3.37, -1.62));
+  MatchSet s = MakeMatches(w);
+  double before = 0.0;
+  for (size_t i = 0; i < s.truth.size(); ++i) {
+    before += (Eigen::Vector2d(s.kps_b[i].pt.x, s.kps_b[i].pt.y) - s.truth[i]).norm();
+  }
+  before /= static_cast<double>(s.truth.size());
+  const SubpixelStats stats =
+      RefineMatches(a, w.b, s.kps_a, s.kps_b, {}, Camera(), SubpixelOptions(), s.matches);
+  int refined = 0;
+  const double after = MeanError(s, &refined);
+  EXPECT_EQ(stats.refined, static_cast<int>(s.matches.size()));
+  EXPECT_EQ(refined, stats.refined);
+  EXPECT_GT(before, 0.3);  // rounding to whole pixels: mean 0.38 px off
+  EXPECT_LT(after, 0.05);
+}
+
+TEST(SubpixelRefinement, ThePredictedRotationMakesARolledPatchRefinable) {
+  // 25 degrees of roll between the frames: an unwarped 11x11 patch no longer fits, the patch
+  // warped by the prediction's local affine map does.
+  const cv::Mat a = Texture(11);
+  const Warped w = Warp(a, 25.0, 1.0, Eigen::Vector2d(0.4, 0.2));
+  MatchSet with = MakeMatches(w), without = MakeMatches(w);
+  std::vector<KeypointPrediction> predictions(with.kps_a.size());
+  for (KeypointPrediction& p : predictions) {
+    p.status = PredictionStatus::kWithDepth;
+    p.local_affine = w.a.cast<float>();
+  }
+  RefineMatches(a, w.b, with.kps_a, with.kps_b, predictions, Camera(), SubpixelOptions(),
+                with.matches);
+  RefineMatches(a, w.b, without.kps_a, without.kps_b, {}, Camera(), SubpixelOptions(),
+                without.matches);
+  int refined_with = 0, refined_without = 0;
+  const double err_with = MeanError(with, &refined_with);
+  const double err_without = MeanError(without, &refined_without);
+  EXPECT_GE(refined_with, static_cast<int>(with.matches.size()) * 9 / 10);
+  EXPECT_LT(err_with, 0.1);
+  // Without the rotation the alignment fails or lands off.
+  EXPECT_TRUE(refined_without < refined_with / 2 || err_without > 3.0 * err_with)
+      << refined_without << " refined, mean error " << err_without;
+}
+
+TEST(SubpixelRefinement, ExposureChangeCancels) {
+  const cv::Mat a = Texture(3);
+  Warped w = Warp(a, 0.0, 1.0, Eigen::Vector2d(-2.25, 0.8));
+  w.b.convertTo(w.b, CV_8U, 0.6, 10.0);  // gain 0.6, bias 10
+  MatchSet s = MakeMatches(w);
+  RefineMatches(a, w.b, s.kps_a, s.kps_b, {}, Camera(), SubpixelOptions(), s.matches);
+  int refined = 0;
+  EXPECT_LT(MeanError(s, &refined), 0.06);
+  EXPECT_EQ(refined, static_cast<int>(s.matches.size()));
+}
+
+TEST(SubpixelRefinement, FlatPatchesAndBordersAreLeftUnrefined) {
+  cv::Mat flat(240, 320, CV_8U, cv::Scalar(128));
+  std::vector<cv::KeyPoint> kps = {cv::KeyPoint(cv::Point2f(100, 100), 7.0f),
+                                   cv::KeyPoint(cv::Point2f(1, 1), 7.0f)};
+  std::vector<Match> matches(2);
+  matches[0].query_idx = matches[0].train_idx = 0;
+  matches[1].query_idx = matches[1].train_idx = 1;
+  const SubpixelStats stats =
+      RefineMatches(flat, flat, kps, kps, {}, Camera(), SubpixelOptions(), matches);
+  EXPECT_EQ(stats.refined, 0);
+  EXPECT_EQ(stats.failed_texture, 1);
+  EXPECT_EQ(stats.failed_border, 1);
+  EXPECT_FALSE(matches[0].refined_uv_b.allFinite());
+  cv::Mat color(240, 320, CV_8UC3);
+  EXPECT_THROW(RefineMatches(color, flat, kps, kps, {}, Camera(), SubpixelOptions(), matches),
+               InvalidArgument);
+}
+
+}  // namespace
+}  // namespace imumatch
