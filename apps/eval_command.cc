@@ -16,11 +16,13 @@
 
 #include "commands.h"
 #include "imumatch/core/error.h"
+#include "imumatch/eval/end_to_end.h"
 #include "imumatch/eval/evaluation.h"
 #include "imumatch/eval/outputs.h"
 #include "imumatch/eval/pose_pair.h"
 #include "imumatch/eval/report.h"
 #include "imumatch/eval/seed_cases.h"
+#include "imumatch/eval/summary.h"
 #include "imumatch/imu/imu_integrator.h"
 #include "imumatch/io/dataset.h"
 
@@ -47,6 +49,10 @@ struct CommonArgs {
   double gate = 0.99;
   double fixed_half = 10.0;
   double z_min = -1.0, z_max = -1.0;  // < 0: PredictionOptions defaults
+  bool no_refine = false;
+  double guided_ratio = -1.0;  // < 0: --ratio
+  double still_s = 1.0;
+  std::string sigma_scaling = "size";
 };
 
 void AddCommonOptions(CLI::App* cmd, CommonArgs& a) {
@@ -82,6 +88,16 @@ void AddCommonOptions(CLI::App* cmd, CommonArgs& a) {
       ->capture_default_str();
   cmd->add_option("--z-min", a.z_min, "no-depth prediction: nearest depth of the segment (m)");
   cmd->add_option("--z-max", a.z_max, "no-depth prediction: farthest depth of the segment (m)");
+  cmd->add_option("--guided-ratio", a.guided_ratio,
+                  "guided: Lowe's ratio inside the search region (default: --ratio)");
+  cmd->add_option("--sigma-scaling", a.sigma_scaling,
+                  "keypoint localisation noise: size (grows with the keypoint's size) | none")
+      ->capture_default_str();
+  cmd->add_flag("--no-refine", a.no_refine,
+                "guided: do not refine matched positions to sub-pixel accuracy");
+  cmd->add_option("--still", a.still_s,
+                  "recorded IMU: seconds of still start used to estimate the gyro bias (0 = none)")
+      ->capture_default_str();
 }
 
 std::vector<std::string> SplitList(const std::string& s) {
@@ -110,12 +126,21 @@ EvaluationOptions MakeOptions(const CommonArgs& a) {
   IMUMATCH_CHECK(a.threshold >= 0.0, "--threshold must be > 0");
   IMUMATCH_CHECK(a.e2e_frames == 0 || a.e2e_frames >= 2, "--e2e-frames must be 0 or >= 2");
   o.ratio = a.ratio;
-  o.guided.ratio = a.ratio;
+  o.guided.ratio = a.guided_ratio > 0.0 ? a.guided_ratio : a.ratio;
   o.guided.mutual = a.mutual;
   o.prediction.gate_probability = a.gate;
   o.prediction.fixed_half_size = a.fixed_half;
   if (a.z_min >= 0.0) o.prediction.segment_min_depth = a.z_min;
   if (a.z_max >= 0.0) o.prediction.segment_max_depth = a.z_max;
+  o.refine_subpixel = !a.no_refine;
+  if (a.sigma_scaling == "none") {
+    o.prediction.sigma_scaling = KeypointSigmaScaling::kNone;
+  } else if (a.sigma_scaling == "size") {
+    o.prediction.sigma_scaling = KeypointSigmaScaling::kSize;
+  } else {
+    throw InvalidArgument("--sigma-scaling must be size or none, got '" + a.sigma_scaling + "'");
+  }
+  o.still_init_s = a.still_s;
   o.Check();
   return o;
 }

@@ -11,12 +11,15 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "imumatch/eval/end_to_end.h"
 #include "imumatch/eval/evaluation.h"
 #include "imumatch/eval/match_image.h"
 #include "imumatch/eval/plots.h"
 #include "imumatch/eval/pose_pair.h"
 #include "imumatch/eval/report.h"
 #include "imumatch/eval/seed_cases.h"
+#include "imumatch/eval/summary.h"
+#include "imumatch/io/dataset.h"
 #include "imumatch/sim/synthetic_sequence.h"
 #include "imumatch/testing/test_data.h"
 
@@ -139,7 +142,9 @@ TEST(EvalIntegrationTest, GroundTruthMotionSourceAndPaperMode) {
   const EvaluationResult gt = EvaluateSource(c.source, c.pairs, o);
   ASSERT_EQ(gt.records.size(), 1u);
   EXPECT_NEAR(gt.records[0].motion_rotation_error_deg, 0.0, 1e-6);
-  EXPECT_GE(Summarize(gt.records, 5.0)[0].precision, 0.99);
+  // At most one gross error in about 75 matches (0 with duplicate_radius_px = 0: a wrong match
+  // whose twin used to fail it in the ratio test; over the demo's cases twins gain far more).
+  EXPECT_LE(Summarize(gt.records, 5.0)[0].wrong, 1.0);
   EXPECT_GT(Summarize(gt.records, 5.0)[0].correct, 50.0);
   // The paper's integration (gravity not removed) over 2 s is far off: its motion error shows it.
   o.motion_source = MotionSource::kImu;
@@ -218,6 +223,119 @@ TEST(EvalIntegrationTest, RealTumPairAgainstGroundTruth) {
     EXPECT_GE(g.correct, b.correct);
     EXPECT_GE(g.precision, b.precision);
     EXPECT_GT(g.precision, 0.9);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The real flight: EuRoC MH_05 excerpt (real ADIS16448 IMU, k1 = -0.28 lens, depth for frames
+// 0..35 only). Pairs 0-19 have depth, 100-119 have none.
+
+struct FlightRun {
+  EvaluationResult result;
+  double threshold_px = 0.0;
+};
+
+FlightRun RunFlight(MotionSource source, bool refine) {
+  DatasetOptions dopt;
+  const EvalSource src = MakeDiskSource(LoadDataset(testing::DataPath("euroc_mh05_flight"), dopt));
+  EvaluationOptions o;
+  o.detectors = {DetectorKind::kOrb, DetectorKind::kSift};
+  o.methods = {MatchMethod::kBruteForce, MatchMethod::kGuided};
+  o.motion_source = source;
+  o.refine_subpixel = refine;
+  o.seed = 42;
+  std::vector<FramePair> pairs;
+  for (size_t a = 0; a < 20; ++a) pairs.push_back({a, a + 1});
+  for (size_t a = 100; a < 120; ++a) pairs.push_back({a, a + 1});
+  FlightRun run;
+  run.result = EvaluateSource(src, pairs, o);
+  run.threshold_px = ChooseThreshold(run.result, false, std::nullopt).threshold_px;
+  return run;
+}
+
+const FlightRun& FlightImu() {
+  static const FlightRun run = RunFlight(MotionSource::kImu, true);
+  return run;
+}
+
+TEST(EvalFlightTest, DepthImagesAndTheStillStartAreUsed) {
+  const FlightRun& run = FlightImu();
+  ASSERT_TRUE(run.result.skipped.empty()) << run.result.skipped.front().reason;
+  ASSERT_EQ(run.result.records.size(), 80u);  // 40 pairs x 2 detectors
+  int with_depth = 0, keypoints_with_depth = 0;
+  for (const auto& r : run.result.records) {
+    with_depth += r.has_depth;
+    EXPECT_EQ(r.has_depth, r.frame_a < 36) << r.frame_a;
+    keypoints_with_depth += r.keypoints_a_with_depth;
+    if (!r.has_depth) {
+      EXPECT_EQ(r.keypoints_a_with_depth, 0);
+    }
+    // The gyro bias from the still start (about 0.08 rad/s about z) is removed: the IMU's
+    // rotation over 50 ms agrees with the ground truth to hundredths of a degree (0.2 deg
+    // without it).
+    EXPECT_LT(r.motion_rotation_error_deg, 0.03) << r.frame_a;
+  }
+  EXPECT_EQ(with_depth, 40);
+  // depth0 covers 0.5-16 % of the pixels (motion stereo, up to about 20 m in the machine hall).
+  EXPECT_GT(keypoints_with_depth, 20 * with_depth);
+  bool bias_note = false;
+  for (const auto& n : run.result.notes)
+    bias_note |= n.find("gyro bias from the still") != std::string::npos;
+  EXPECT_TRUE(bias_note);
+}
+
+TEST(EvalFlightTest, WindowsHoldTheTruePartners) {
+  for (MotionSource source : {MotionSource::kImu, MotionSource::kGroundTruth}) {
+    const FlightRun gt_run = source == MotionSource::kImu ? FlightRun() : RunFlight(source, false);
+    const FlightRun& run = source == MotionSource::kImu ? FlightImu() : gt_run;
+    const auto rows = Summarize(run.result.records, run.threshold_px);
+    for (DetectorKind d : {DetectorKind::kOrb, DetectorKind::kSift}) {
+      SCOPED_TRACE(ToString(d) + std::string(" ") + ToString(source));
+      const MethodSummary& g = Row(rows, run.result.records[0].case_name, d, MatchMethod::kGuided);
+      ASSERT_GT(g.window_checked, 5000);
+      // Issue #10's bounds: 0.98 with the IMU, 0.99 with the exact motion. Before the fix (the
+      // segment straight in distorted pixels, no gyro bias, no near floor) ORB had 0.91 / 0.76
+      // in its worst pairs.
+      EXPECT_GE(g.window_recall, source == MotionSource::kImu ? 0.98 : 0.99);
+    }
+  }
+}
+
+TEST(EvalFlightTest, GuidedBeatsBruteForceWithAndWithoutDepth) {
+  const FlightRun& run = FlightImu();
+  const auto split = SplitByDepth(run.result.records);
+  const auto rows = Summarize(split, run.threshold_px);
+  for (const std::string half : {" [depth]", " [no depth]"}) {
+    for (DetectorKind d : {DetectorKind::kOrb, DetectorKind::kSift}) {
+      SCOPED_TRACE(ToString(d) + half);
+      const std::string c = run.result.records[0].case_name + half;
+      const MethodSummary& g = Row(rows, c, d, MatchMethod::kGuided);
+      const MethodSummary& b = Row(rows, c, d, MatchMethod::kBruteForce);
+      EXPECT_EQ(g.pairs, 20);
+      // Today's main had 0.58 (SIFT) and 0.83 (ORB) of brute force's correct matches.
+      EXPECT_GE(g.correct, b.correct);
+      EXPECT_GE(g.precision, b.precision);
+    }
+  }
+  // Precision at tight thresholds, pooled: the refined positions are within a pixel far more
+  // often than the keypoints brute force matches.
+  for (DetectorKind d : {DetectorKind::kOrb, DetectorKind::kSift}) {
+    for (double t : {1.0, 3.0, 8.0}) {
+      SCOPED_TRACE(ToString(d) + " @" + std::to_string(t));
+      JudgedCounts g, b;
+      for (const auto& r : run.result.records) {
+        if (r.detector != d) continue;
+        for (const auto& mr : r.runs) {
+          const JudgedCounts c = CountCorrect(mr.residuals, t);
+          JudgedCounts& acc = mr.method == MatchMethod::kGuided ? g : b;
+          acc.matches += c.matches;
+          acc.correct += c.correct;
+        }
+      }
+      ASSERT_GT(g.matches, 0);
+      EXPECT_GE(static_cast<double>(g.correct) / g.matches,
+                static_cast<double>(b.correct) / b.matches);
+    }
   }
 }
 

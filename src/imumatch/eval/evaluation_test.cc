@@ -1,5 +1,12 @@
 #include "imumatch/eval/evaluation.h"
 
+#include "imumatch/core/time.h"
+#include "imumatch/eval/end_to_end.h"
+#include "imumatch/eval/pair_motion.h"
+#include "imumatch/eval/summary.h"
+#include "imumatch/io/dataset.h"
+#include "imumatch/testing/test_data.h"
+
 #include <gtest/gtest.h>
 
 #include "imumatch/core/error.h"
@@ -88,6 +95,73 @@ TEST(EvaluationTest, MethodAndMotionSourceNames) {
   EvaluationOptions o;
   o.detectors.clear();
   EXPECT_THROW(o.Check(), InvalidArgument);
+}
+
+TEST(EvaluationTest, WindowRecallCountsTheCorrectBruteForcePartnersInside) {
+  // Hand-built record: brute force made four matches, judged 1.0 px (depth), 5.0 px (depth),
+  // 0.5 px (epipolar) and unjudgeable; the guided windows held partners 0, 1 and 3.
+  DetectorPairRecord rec;
+  MethodRun bf;
+  bf.method = MatchMethod::kBruteForce;
+  bf.residuals = {{ResidualKind::kDepth, 1.0f},
+                  {ResidualKind::kDepth, 5.0f},
+                  {ResidualKind::kEpipolar, 0.5f},
+                  {ResidualKind::kUnjudgeable, std::numeric_limits<float>::infinity()}};
+  MethodRun guided;
+  guided.method = MatchMethod::kGuided;
+  guided.bf_partner_in_window = {1, 1, 0, 1};
+  guided.bf_partner_prediction = {PredictionStatus::kWithDepth, PredictionStatus::kWithDepth,
+                                  PredictionStatus::kWithoutDepth, PredictionStatus::kWithDepth};
+  guided.bf_partner_beyond_segment = {0, 0, 1, 0};
+  rec.runs = {bf, guided};
+  rec.bf_run = 0;
+  // At 2 px the correct ones are matches 0 and 2: one inside, one beyond its segment's end.
+  const WindowRecall w = ComputeWindowRecall(rec, rec.runs[1], 2.0);
+  EXPECT_EQ(w.checked, 2);
+  EXPECT_EQ(w.inside, 1);
+  EXPECT_EQ(w.missed_without_depth, 1);
+  EXPECT_EQ(w.missed_beyond_segment, 1);
+  EXPECT_DOUBLE_EQ(w.Recall(), 0.5);
+  // At 8 px match 1 counts too.
+  EXPECT_DOUBLE_EQ(ComputeWindowRecall(rec, rec.runs[1], 8.0).Recall(), 2.0 / 3.0);
+  // Summaries pool it.
+  rec.case_name = "c";
+  const auto rows = Summarize({rec}, 2.0);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_DOUBLE_EQ(rows[1].window_recall, 0.5);
+  EXPECT_DOUBLE_EQ(rows[0].window_recall, -1.0);  // brute force has no window
+  // The depth split relabels.
+  rec.has_depth = true;
+  EXPECT_EQ(SplitByDepth({rec})[0].case_name, "c [depth]");
+}
+
+TEST(EvaluationTest, GyroBiasFromTheStillStartOfARealLog) {
+  // EuRoC MH_05 starts on the ground. Its ground-truth estimate (batch solution, first row)
+  // has gyro bias (-0.001806, 0.020940, 0.076870) rad/s: the still-start mean agrees.
+  const Dataset d = LoadDataset(testing::DataPath("euroc_mh05_flight"));
+  const ImuBiasEstimate e = EstimateImuBias(d, 1.0);
+  ASSERT_TRUE(e.from_still_start) << e.note;
+  EXPECT_NEAR(e.bias.gyro.x(), -0.001806, 2e-3);
+  EXPECT_NEAR(e.bias.gyro.y(), 0.020940, 2e-3);
+  EXPECT_NEAR(e.bias.gyro.z(), 0.076870, 2e-3);
+  EXPECT_GT(e.gyro_bias_sigma, 0.0);
+  EXPECT_LT(e.gyro_bias_sigma, 1e-3);
+  EXPECT_TRUE(e.bias.accel.isZero());
+  // 0 s: no estimate, said so.
+  const ImuBiasEstimate none = EstimateImuBias(d, 0.0);
+  EXPECT_FALSE(none.from_still_start);
+  EXPECT_TRUE(none.bias.gyro.isZero());
+  EXPECT_NE(none.note.find("assumed zero"), std::string::npos);
+  // A log that does not start still (cut to begin in flight): not still, said so.
+  Dataset flying = d;
+  ImuBuffer cut;
+  for (const ImuSample& s : d.imu.samples()) {
+    if (s.t_ns >= d.frames.front().t_ns) cut.Push(s);
+  }
+  flying.imu = cut;
+  const ImuBiasEstimate moving = EstimateImuBias(flying, 1.0);
+  EXPECT_FALSE(moving.from_still_start);
+  EXPECT_NE(moving.note.find("not still"), std::string::npos) << moving.note;
 }
 
 }  // namespace

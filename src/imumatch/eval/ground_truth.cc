@@ -109,27 +109,38 @@ PairGroundTruth::PairGroundTruth(const PinholeCamera& camera, const Rigid3d& cam
 }
 
 MatchResidual PairGroundTruth::Judge(int query_idx, int train_idx) const {
-  IMUMATCH_CHECK(query_idx >= 0 && query_idx < static_cast<int>(projected_.size()),
-                 "query_idx " << query_idx);
   IMUMATCH_CHECK(train_idx >= 0 && train_idx < static_cast<int>(keypoints_b_.size()),
                  "train_idx " << train_idx);
+  return JudgeAt(query_idx, keypoints_b_[train_idx], &keypoints_b_undistorted_[train_idx]);
+}
+
+MatchResidual PairGroundTruth::JudgeAt(int query_idx, const Eigen::Vector2d& uv_b) const {
+  return JudgeAt(query_idx, uv_b, nullptr);
+}
+
+MatchResidual PairGroundTruth::JudgeAt(int query_idx, const Eigen::Vector2d& uv_b,
+                                       const Eigen::Vector2d* uv_b_undistorted) const {
+  IMUMATCH_CHECK(query_idx >= 0 && query_idx < static_cast<int>(projected_.size()),
+                 "query_idx " << query_idx);
   MatchResidual r;
+  if (!uv_b.allFinite()) return {ResidualKind::kUnjudgeable, kInf};
   const auto& projected = projected_[query_idx];
   if (projected) {
     r.kind = ResidualKind::kDepth;
-    r.residual_px = static_cast<float>((*projected - keypoints_b_[train_idx]).norm());
+    r.residual_px = static_cast<float>((*projected - uv_b).norm());
     return r;
   }
   if (has_depth_[query_idx]) return {ResidualKind::kUnjudgeable, kInf};  // behind camera B
+  const Eigen::Vector2d b_undistorted =
+      uv_b_undistorted != nullptr ? *uv_b_undistorted : Undistorted(camera_, uv_b);
   double residual;
   if (pure_rotation_) {
     const Eigen::Vector3d h =
         infinite_homography_ * keypoints_a_undistorted_[query_idx].homogeneous();
     if (!(h.z() > 0.0)) return {ResidualKind::kUnjudgeable, kInf};
-    residual = (h.hnormalized() - keypoints_b_undistorted_[train_idx]).norm();
+    residual = (h.hnormalized() - b_undistorted).norm();
   } else {
-    residual = EpipolarDistance(fundamental_, keypoints_a_undistorted_[query_idx],
-                                keypoints_b_undistorted_[train_idx]);
+    residual = EpipolarDistance(fundamental_, keypoints_a_undistorted_[query_idx], b_undistorted);
   }
   if (!std::isfinite(residual)) return {ResidualKind::kUnjudgeable, kInf};
   r.kind = ResidualKind::kEpipolar;
@@ -140,7 +151,10 @@ MatchResidual PairGroundTruth::Judge(int query_idx, int train_idx) const {
 std::vector<MatchResidual> PairGroundTruth::Judge(const std::vector<Match>& matches) const {
   std::vector<MatchResidual> out;
   out.reserve(matches.size());
-  for (const Match& m : matches) out.push_back(Judge(m.query_idx, m.train_idx));
+  for (const Match& m : matches) {
+    out.push_back(m.refined_uv_b.allFinite() ? JudgeAt(m.query_idx, m.refined_uv_b.cast<double>())
+                                             : Judge(m.query_idx, m.train_idx));
+  }
   return out;
 }
 

@@ -43,9 +43,10 @@ struct GtCandidate {
 };
 
 struct GroundTruthOptions {
-  // Depth readings outside [min_depth, max_depth] metres count as "no depth".
+  // Depth readings outside [min_depth, max_depth] metres count as "no depth" (the same bounds as
+  // PredictionOptions: far readings of a large room are real).
   double min_depth = 0.1;
-  double max_depth = 10.0;
+  double max_depth = 100.0;
   // Candidates for the possible-correspondence count are kept up to this distance, so any
   // threshold up to it can be evaluated later.
   double max_candidate_px = 10.0;
@@ -63,8 +64,12 @@ class PairGroundTruth {
                   const GroundTruthOptions& options = GroundTruthOptions());
 
   // Residual of one match / many matches (query_idx into keypoints_a, train_idx into keypoints_b).
+  // The many-matches form judges Match::refined_uv_b instead of the keypoint of B when the match
+  // was refined (finite).
   MatchResidual Judge(int query_idx, int train_idx) const;
   std::vector<MatchResidual> Judge(const std::vector<Match>& matches) const;
+  // The residual of keypoint query_idx of A matched to an arbitrary position uv_b of B (pixels).
+  MatchResidual JudgeAt(int query_idx, const Eigen::Vector2d& uv_b) const;
 
   // Ground-truth position in B of keypoint a (nullopt without depth or behind camera B).
   const std::optional<Eigen::Vector2d>& ProjectedInB(int a) const { return projected_[a]; }
@@ -73,6 +78,8 @@ class PairGroundTruth {
   const std::vector<GtCandidate>& candidates() const { return candidates_; }
 
  private:
+  MatchResidual JudgeAt(int query_idx, const Eigen::Vector2d& uv_b,
+                        const Eigen::Vector2d* uv_b_undistorted) const;
   PinholeCamera camera_;
   Eigen::Matrix3d fundamental_;  // undistorted pixels A -> epipolar line in B
   Eigen::Matrix3d infinite_homography_;

@@ -82,6 +82,7 @@ cv::Mat DrawMatchImage(const PairVisual& visual, size_t run_index,
   }
   // Search windows on frame B.
   cv::Mat right = canvas(cv::Rect(a.cols, header, b.cols, b.rows));
+  const bool distorted = visual.camera.HasDistortion();
   int windows = 0;
   const size_t stride = options.max_windows > 0
                             ? std::max<size_t>(1, (run.matches.size() + options.max_windows - 1) /
@@ -94,22 +95,50 @@ cv::Mat DrawMatchImage(const PairVisual& visual, size_t run_index,
     const KeypointPrediction& p = run.predictions[m.query_idx];
     if (!p.HasWindow()) continue;
     ++windows;
-    cv::rectangle(right, cv::Point2f(p.min_x, p.min_y), cv::Point2f(p.max_x, p.max_y), kWindow, 1,
-                  cv::LINE_AA);
+    // Predictions are in ideal pixels: every outline is sampled there and mapped into the image,
+    // so a straight epipolar segment shows as the curve it is under a distorted lens.
+    auto polyline = [&](const std::vector<Eigen::Vector2f>& ideal, const cv::Scalar& colour,
+                        bool closed) {
+      std::vector<cv::Point> pts;
+      for (const Eigen::Vector2f& q : ideal) {
+        const Eigen::Vector2d px = distorted ? visual.camera.IdealToPixel(q.cast<double>())
+                                             : Eigen::Vector2d(q.cast<double>());
+        pts.emplace_back(cvRound(px.x() * 16.0), cvRound(px.y() * 16.0));
+      }
+      cv::polylines(right, pts, closed, colour, 1, cv::LINE_AA, 4);
+    };
+    auto edge = [](const Eigen::Vector2f& from, const Eigen::Vector2f& to,
+                   std::vector<Eigen::Vector2f>& out) {
+      constexpr int kSteps = 8;
+      for (int i = 0; i < kSteps; ++i) {
+        out.push_back(from + (to - from) * (static_cast<float>(i) / kSteps));
+      }
+    };
+    std::vector<Eigen::Vector2f> box;
+    const Eigen::Vector2f c00(p.min_x, p.min_y), c10(p.max_x, p.min_y), c11(p.max_x, p.max_y),
+        c01(p.min_x, p.max_y);
+    edge(c00, c10, box);
+    edge(c10, c11, box);
+    edge(c11, c01, box);
+    edge(c01, c00, box);
+    polyline(box, kWindow, true);
     if (p.status == PredictionStatus::kWithoutDepth) {
-      cv::line(right, cv::Point2f(p.segment_start.x(), p.segment_start.y()),
-               cv::Point2f(p.segment_end.x(), p.segment_end.y()), kWindow, 1, cv::LINE_AA);
+      std::vector<Eigen::Vector2f> segment;
+      edge(p.segment_start, p.segment_end, segment);
+      segment.push_back(p.segment_end);
+      polyline(segment, kWindow, false);
     } else if (p.covariance.squaredNorm() > 0.0f) {
       Eigen::SelfAdjointEigenSolver<Eigen::Matrix2f> es(p.covariance);
       const Eigen::Vector2f ev = es.eigenvalues().cwiseMax(0.0f);
-      const Eigen::Vector2f major = es.eigenvectors().col(1);
       const float gate = std::sqrt(9.21f);  // 99% gate, 2 dof
-      const float angle = std::atan2(major.y(), major.x()) * 180.0f / static_cast<float>(M_PI);
-      cv::ellipse(right,
-                  cv::RotatedRect(
-                      cv::Point2f(p.uv.x(), p.uv.y()),
-                      cv::Size2f(2 * gate * std::sqrt(ev(1)), 2 * gate * std::sqrt(ev(0))), angle),
-                  kEllipse, 1, cv::LINE_AA);
+      std::vector<Eigen::Vector2f> ellipse;
+      for (int i = 0; i < 32; ++i) {
+        const float t = static_cast<float>(i) * 2.0f * static_cast<float>(M_PI) / 32.0f;
+        ellipse.push_back(p.uv +
+                          gate * (std::cos(t) * std::sqrt(ev(1)) * es.eigenvectors().col(1) +
+                                  std::sin(t) * std::sqrt(ev(0)) * es.eigenvectors().col(0)));
+      }
+      polyline(ellipse, kEllipse, true);
     }
   }
   int correct = 0;

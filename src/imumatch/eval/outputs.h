@@ -3,8 +3,10 @@
 #include <string>
 #include <vector>
 
+#include "imumatch/eval/end_to_end.h"
 #include "imumatch/eval/evaluation.h"
 #include "imumatch/eval/report.h"
+#include "imumatch/eval/summary.h"
 
 namespace imumatch {
 

@@ -5,7 +5,9 @@
 
 #include <opencv2/core.hpp>
 
+#include "imumatch/eval/end_to_end.h"
 #include "imumatch/eval/evaluation.h"
+#include "imumatch/eval/summary.h"
 
 namespace imumatch {
 

@@ -6,6 +6,7 @@
 #include <iomanip>
 #include <map>
 #include <sstream>
+#include <tuple>
 
 #include "imumatch/core/error.h"
 
@@ -121,8 +122,8 @@ std::string MarkdownSpeedupTable(const std::vector<MethodSummary>& summaries) {
   std::ostringstream out;
   out << "| Case | Detector | BF match ms | Guided match ms (incl. predict) | Speed-up | BF "
          "correct "
-         "| Guided correct | BF precision | Guided precision |\n"
-         "|---|---|---:|---:|---:|---:|---:|---:|---:|\n";
+         "| Guided correct | BF precision | Guided precision | Window recall |\n"
+         "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const auto& c : Cases(summaries)) {
     for (const auto& [d, m] : Rows(summaries)) {
       if (m != MatchMethod::kGuided) continue;
@@ -134,8 +135,76 @@ std::string MarkdownSpeedupTable(const std::vector<MethodSummary>& summaries) {
           << Fixed(guided_ms, 2) << " | x"
           << Fixed(guided_ms > 0 ? b->match_ms.mean / guided_ms : 0.0, 1) << " | "
           << Fixed(b->correct, 1) << " | " << Fixed(g->correct, 1) << " | "
-          << Fixed(b->precision, 3) << " | " << Fixed(g->precision, 3) << " |\n";
+          << Fixed(b->precision, 3) << " | " << Fixed(g->precision, 3) << " | "
+          << (g->window_recall >= 0.0 ? Fixed(g->window_recall, 4) : std::string("n/a")) << " |\n";
     }
+  }
+  return out.str();
+}
+
+std::string MarkdownWindowTable(const std::vector<DetectorPairRecord>& records,
+                                double threshold_px) {
+  struct Acc {
+    WindowRecall w;
+    std::vector<double> per_pair;
+  };
+  std::map<std::tuple<std::string, int, int>, Acc> acc;
+  std::vector<std::string> order;
+  for (const auto& r : records) {
+    if (std::find(order.begin(), order.end(), r.case_name) == order.end())
+      order.push_back(r.case_name);
+    for (const auto& run : r.runs) {
+      if (!UsesPrediction(run.method)) continue;
+      const WindowRecall w = ComputeWindowRecall(r, run, threshold_px);
+      if (w.checked == 0) continue;
+      Acc& a = acc[{r.case_name, static_cast<int>(r.detector), static_cast<int>(run.method)}];
+      a.w.checked += w.checked;
+      a.w.inside += w.inside;
+      a.w.missed_with_depth += w.missed_with_depth;
+      a.w.missed_without_depth += w.missed_without_depth;
+      a.w.missed_beyond_segment += w.missed_beyond_segment;
+      a.w.missed_no_prediction += w.missed_no_prediction;
+      a.per_pair.push_back(w.Recall());
+    }
+  }
+  std::ostringstream out;
+  out << "| Case | Detector | Method | BF correct checked | pooled | worst pair | missed: with "
+         "depth / epipolar (beyond its ends) / no prediction "
+         "|\n|---|---|---|---:|---:|---:|---:|\n";
+  for (const auto& c : order) {
+    for (const auto& [key, a] : acc) {
+      if (std::get<0>(key) != c) continue;
+      out << "| " << c << " | " << ToString(static_cast<DetectorKind>(std::get<1>(key))) << " | "
+          << DisplayName(static_cast<MatchMethod>(std::get<2>(key))) << " | " << a.w.checked
+          << " | " << Fixed(a.w.Recall(), 4) << " | "
+          << Fixed(*std::min_element(a.per_pair.begin(), a.per_pair.end()), 3) << " | "
+          << a.w.missed_with_depth << " / " << a.w.missed_without_depth << " ("
+          << a.w.missed_beyond_segment << ") / " << a.w.missed_no_prediction << " |\n";
+    }
+  }
+  return out.str();
+}
+
+std::string MarkdownMotionErrorTable(const std::vector<DetectorPairRecord>& records) {
+  std::map<std::string, std::vector<double>> rot, trans;
+  std::vector<std::string> order;
+  std::map<std::pair<std::string, size_t>, bool> seen;  // one value per pair, not per detector
+  for (const auto& r : records) {
+    if (!seen.emplace(std::make_pair(r.case_name, r.pair_index), true).second) continue;
+    if (rot.find(r.case_name) == rot.end()) order.push_back(r.case_name);
+    rot[r.case_name].push_back(r.motion_rotation_error_deg);
+    trans[r.case_name].push_back(r.motion_translation_error_m * 1000.0);
+  }
+  std::ostringstream out;
+  out << "| Case | pairs | rotation error deg: median / p90 / max | translation error mm: median "
+         "/ p90 / max |\n|---|---:|---:|---:|\n";
+  for (const auto& c : order) {
+    const StageStats sr = ComputeStageStats(rot[c]), st = ComputeStageStats(trans[c]);
+    const double max_r = *std::max_element(rot[c].begin(), rot[c].end());
+    const double max_t = *std::max_element(trans[c].begin(), trans[c].end());
+    out << "| " << c << " | " << sr.count << " | " << Fixed(sr.p50, 4) << " / " << Fixed(sr.p90, 4)
+        << " / " << Fixed(max_r, 4) << " | " << Fixed(st.p50, 2) << " / " << Fixed(st.p90, 2)
+        << " / " << Fixed(max_t, 2) << " |\n";
   }
   return out.str();
 }
@@ -188,6 +257,20 @@ std::string MarkdownReport(const EvaluationResult& result, const ReportContext& 
       << Fixed(context.threshold.threshold_px, 2) << " px)\n\n"
       << MarkdownMatchTable(summaries);
   out << "\n## IMU-guided vs brute force\n\n" << MarkdownSpeedupTable(summaries);
+  // A sequence with depth for only some frames: the two halves separately.
+  bool with = false, without = false;
+  for (const auto& r : result.records) (r.has_depth ? with : without) = true;
+  if (with && without) {
+    out << "\n### By depth of frame A\n\n"
+        << MarkdownSpeedupTable(
+               Summarize(SplitByDepth(result.records), context.threshold.threshold_px));
+  }
+  out << "\n## Window recall\n\n"
+      << "Of the brute-force matches judged correct, the share whose partner lies inside the "
+         "guided search region.\n\n"
+      << MarkdownWindowTable(result.records, context.threshold.threshold_px);
+  out << "\n## Motion given to the predictor vs ground truth (per pair)\n\n"
+      << MarkdownMotionErrorTable(result.records);
   out << "\n## Details\n\n" << MarkdownDetailTable(summaries);
   if (!context.fixed_thresholds.empty()) {
     out << "\n## Precision at fixed thresholds (all cases pooled)\n\n"
@@ -216,7 +299,7 @@ void WriteSummaryCsv(std::ostream& out, const std::vector<MethodSummary>& summar
          "extract_ms_p90,extract_ms_p99,predict_ms_mean,predict_ms_p50,predict_ms_p90,"
          "predict_ms_p99,match_ms_mean,match_ms_p50,match_ms_p90,match_ms_p99,total_ms_mean,"
          "total_ms_p50,total_ms_p90,total_ms_p99,matches,correct,false,possible,precision,recall,"
-         "epipolar_fraction\n";
+         "epipolar_fraction,window_recall\n";
   out << std::setprecision(6);
   for (const auto& s : summaries) {
     out << CsvField(s.case_name) << "," << ToString(s.detector) << "," << ToString(s.method) << ","
@@ -225,7 +308,8 @@ void WriteSummaryCsv(std::ostream& out, const std::vector<MethodSummary>& summar
       out << "," << st->mean << "," << st->p50 << "," << st->p90 << "," << st->p99;
     }
     out << "," << s.matches << "," << s.correct << "," << s.wrong << "," << s.possible << ","
-        << s.precision << "," << s.recall << "," << s.epipolar_fraction << "\n";
+        << s.precision << "," << s.recall << "," << s.epipolar_fraction << "," << s.window_recall
+        << "\n";
   }
 }
 
@@ -233,7 +317,8 @@ void WritePairsCsv(std::ostream& out, const std::vector<DetectorPairRecord>& rec
                    double threshold_px) {
   out << "case,pair,frame_a,frame_b,t_a_ns,t_b_ns,detector,method,keypoints_a,keypoints_b,"
          "keypoints_a_with_depth,read_ms,extract_ms,motion_ms,predict_ms,match_ms,matches,correct,"
-         "false,possible,precision,recall,motion_rotation_error_deg,motion_translation_error_m\n";
+         "false,possible,precision,recall,motion_rotation_error_deg,motion_translation_error_m,"
+         "has_depth,window_recall\n";
   out << std::setprecision(6);
   for (const auto& r : records) {
     for (const auto& run : r.runs) {
@@ -245,7 +330,9 @@ void WritePairsCsv(std::ostream& out, const std::vector<DetectorPairRecord>& rec
           << (UsesPrediction(run.method) ? r.motion_ms : 0.0) << "," << run.predict_ms << ","
           << run.match_ms << "," << c.counts.matches << "," << c.counts.correct << ","
           << c.counts.wrong << "," << c.possible << "," << c.precision << "," << c.recall << ","
-          << r.motion_rotation_error_deg << "," << r.motion_translation_error_m << "\n";
+          << r.motion_rotation_error_deg << "," << r.motion_translation_error_m << ","
+          << (r.has_depth ? 1 : 0) << "," << ComputeWindowRecall(r, run, threshold_px).Recall()
+          << "\n";
     }
   }
 }
@@ -296,7 +383,9 @@ nlohmann::json ReportToJson(const EvaluationResult& result, const ReportContext&
                        {"possible", s.possible},
                        {"precision", s.precision},
                        {"recall", s.recall},
-                       {"epipolar_fraction", s.epipolar_fraction}});
+                       {"epipolar_fraction", s.epipolar_fraction},
+                       {"window_recall", s.window_recall},
+                       {"window_checked", s.window_checked}});
   }
   j["summary"] = summary;
   json pairs = json::array();

@@ -7,7 +7,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "imumatch/eval/end_to_end.h"
 #include "imumatch/eval/evaluation.h"
+#include "imumatch/eval/summary.h"
 
 namespace imumatch {
 
@@ -33,6 +35,11 @@ std::string MarkdownMatchTable(const std::vector<MethodSummary>& summaries);
 std::string MarkdownDetailTable(const std::vector<MethodSummary>& summaries);
 // IMU-guided against brute force per case and detector: match time ratio, correct, precision.
 std::string MarkdownSpeedupTable(const std::vector<MethodSummary>& summaries);
+// Window recall of the guided methods per case and detector (pooled, worst pair, misses by how
+// the query was predicted), and the motion's error against the ground truth per case.
+std::string MarkdownWindowTable(const std::vector<DetectorPairRecord>& records,
+                                double threshold_px);
+std::string MarkdownMotionErrorTable(const std::vector<DetectorPairRecord>& records);
 // Precision (pooled over every case) of each detector x method at several thresholds.
 std::string MarkdownThresholdTable(const std::vector<DetectorPairRecord>& records,
                                    const std::vector<double>& thresholds_px);

@@ -1,0 +1,87 @@
+#include "imumatch/eval/evaluation_options.h"
+
+#include <cctype>
+#include <cmath>
+
+#include "imumatch/core/error.h"
+
+namespace imumatch {
+namespace {
+
+std::string Lower(std::string_view s) {
+  std::string out(s);
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+}  // namespace
+
+std::string ToString(MatchMethod method) {
+  switch (method) {
+    case MatchMethod::kBruteForce:
+      return "bf";
+    case MatchMethod::kGuided:
+      return "guided";
+    case MatchMethod::kFixedWindow:
+      return "fixed10";
+    case MatchMethod::kOwnBruteForce:
+      return "bf_own";
+  }
+  return "?";
+}
+
+std::string DisplayName(MatchMethod method) {
+  switch (method) {
+    case MatchMethod::kBruteForce:
+      return "BF knn+ratio (OpenCV)";
+    case MatchMethod::kGuided:
+      return "IMU-guided";
+    case MatchMethod::kFixedWindow:
+      return "IMU fixed +-10 px";
+    case MatchMethod::kOwnBruteForce:
+      return "BF ratio (imumatch)";
+  }
+  return "?";
+}
+
+MatchMethod ParseMatchMethod(std::string_view name) {
+  const std::string n = Lower(name);
+  if (n == "bf" || n == "bf_opencv") return MatchMethod::kBruteForce;
+  if (n == "guided") return MatchMethod::kGuided;
+  if (n == "fixed10" || n == "fixed") return MatchMethod::kFixedWindow;
+  if (n == "bf_own") return MatchMethod::kOwnBruteForce;
+  throw InvalidArgument("unknown method '" + std::string(name) +
+                        "' (valid: bf, guided, fixed10, bf_own)");
+}
+
+bool UsesPrediction(MatchMethod method) {
+  return method == MatchMethod::kGuided || method == MatchMethod::kFixedWindow;
+}
+
+MotionSource ParseMotionSource(std::string_view name) {
+  const std::string n = Lower(name);
+  if (n == "imu") return MotionSource::kImu;
+  if (n == "gt" || n == "groundtruth") return MotionSource::kGroundTruth;
+  throw InvalidArgument("unknown motion source '" + std::string(name) + "' (valid: imu, gt)");
+}
+
+const char* ToString(MotionSource source) { return source == MotionSource::kImu ? "imu" : "gt"; }
+
+void EvaluationOptions::Check() const {
+  IMUMATCH_CHECK(!detectors.empty(), "no detector selected");
+  IMUMATCH_CHECK(!methods.empty(), "no method selected");
+  features.Check();
+  IMUMATCH_CHECK(ratio > 0.0 && ratio <= 1.0, "ratio = " << ratio);
+  motion.Check();
+  prediction.Check();
+  guided.Check();
+  subpixel.Check();
+  ground_truth.Check();
+  IMUMATCH_CHECK(std::isfinite(still_init_s) && still_init_s >= 0.0,
+                 "still_init_s = " << still_init_s);
+  IMUMATCH_CHECK(keep_visuals >= 0, "keep_visuals = " << keep_visuals);
+  IMUMATCH_CHECK(queue_capacity >= 0 && queue_capacity <= 16,
+                 "queue_capacity = " << queue_capacity);
+}
+
+}  // namespace imumatch

@@ -1,0 +1,75 @@
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "imumatch/eval/ground_truth.h"
+#include "imumatch/features/feature_factory.h"
+#include "imumatch/imu/camera_motion.h"
+#include "imumatch/matching/guided_matcher.h"
+#include "imumatch/matching/predictor.h"
+#include "imumatch/matching/subpixel_refinement.h"
+
+namespace imumatch {
+
+enum class MatchMethod {
+  kBruteForce,     // OpenCV BFMatcher::knnMatch(k=2) + ratio test: the baseline
+  kGuided,         // IMU prediction + uncertainty windows + guided matcher
+  kFixedWindow,    // IMU prediction + the paper's fixed +-10 px window
+  kOwnBruteForce,  // imumatch's exhaustive matcher + ratio test
+};
+std::string ToString(MatchMethod method);     // "bf", "guided", "fixed10", "bf_own"
+std::string DisplayName(MatchMethod method);  // "BF knn+ratio", "IMU-guided", ...
+MatchMethod ParseMatchMethod(std::string_view name);
+bool UsesPrediction(MatchMethod method);
+
+enum class MotionSource {
+  kImu,          // integrate the dataset's IMU samples (recorded or simulated)
+  kGroundTruth,  // the exact ground-truth relative pose (an ideal IMU + VIO)
+};
+MotionSource ParseMotionSource(std::string_view name);  // "imu" | "gt"
+const char* ToString(MotionSource source);
+
+struct EvaluationOptions {
+  std::vector<DetectorKind> detectors = {DetectorKind::kSift,  DetectorKind::kSurf,
+                                         DetectorKind::kOrb,   DetectorKind::kFastBrief,
+                                         DetectorKind::kAkaze, DetectorKind::kBrisk};
+  FeatureOptions features;  // kind is replaced per detector; max_keypoints = 1000
+  std::vector<MatchMethod> methods = {MatchMethod::kBruteForce, MatchMethod::kGuided,
+                                      MatchMethod::kFixedWindow};
+  double ratio = 0.8;  // Lowe's ratio for the brute-force methods (the guided one: guided.ratio)
+
+  MotionSource motion_source = MotionSource::kImu;
+  CameraMotionOptions motion;  // mode (so3 | paper) and the sigmas the predictor is told
+  // The IMU state at frame A comes from the ground truth (what a VIO back-end would supply),
+  // perturbed by these 1-sigma errors (negative: use motion.velocity_sigma / attitude_sigma):
+  // velocity per axis (m/s), roll and pitch (rad). Seeded with seed + pair index.
+  double velocity_perturbation_sigma = -1.0;
+  double attitude_perturbation_sigma = -1.0;
+  uint64_t seed = 1;
+  // Gyro bias from the first still_init_s seconds of a recorded IMU log (see EstimateImuBias);
+  // 0 integrates without a bias estimate.
+  double still_init_s = 1.0;
+
+  PredictionOptions prediction;
+  GuidedMatcherOptions guided;
+  // Guided methods: refine each match's position in B to sub-pixel accuracy against A's patch
+  // warped by the IMU's prediction (RefineMatches); the judge then judges the refined position.
+  bool refine_subpixel = true;
+  SubpixelOptions subpixel;
+  GroundTruthOptions ground_truth;
+
+  // Keep the images, keypoints, matches and predictions of the first `keep_visuals` pairs of the
+  // source (for match images).
+  int keep_visuals = 0;
+  // Reader thread: frame pairs decoded ahead of processing (bounded queue). 0 = read inline.
+  int queue_capacity = 2;
+  // Called after every processed pair with (done, total).
+  std::function<void(size_t, size_t)> progress;
+  void Check() const;
+};
+
+}  // namespace imumatch

@@ -1,0 +1,81 @@
+#include "imumatch/eval/frame_source.h"
+
+#include <memory>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "imumatch/core/error.h"
+#include "imumatch/io/image_io.h"
+
+namespace imumatch {
+
+FrameReader MakeDiskFrameReader(const Dataset& dataset) {
+  auto frames = std::make_shared<std::vector<FrameRecord>>(dataset.frames);
+  const int width = dataset.camera.width, height = dataset.camera.height;
+  return [frames, width, height](size_t index, bool with_depth) {
+    IMUMATCH_CHECK(index < frames->size(), "frame index " << index);
+    const FrameRecord& f = (*frames)[index];
+    FrameImages out;
+    out.image = LoadImage(f.image_path, ImageColor::kGray);
+    if (width > 0 && height > 0 && (out.image.cols != width || out.image.rows != height)) {
+      throw InputError(f.image_path, "image is " + std::to_string(out.image.cols) + "x" +
+                                         std::to_string(out.image.rows) + ", the camera is " +
+                                         std::to_string(width) + "x" + std::to_string(height));
+    }
+    if (with_depth && !f.depth_path.empty()) out.depth = LoadDepth(f.depth_path, out.image.size());
+    return out;
+  };
+}
+
+EvalSource MakeDiskSource(Dataset dataset) {
+  EvalSource source;
+  source.reader = MakeDiskFrameReader(dataset);
+  source.exact_ground_truth = dataset.kind == DatasetKind::kSynthetic;
+  source.dataset = std::move(dataset);
+  return source;
+}
+
+EvalSource MakeSyntheticSource(const SyntheticSequence& sequence, const std::string& case_name) {
+  EvalSource source;
+  Dataset& d = source.dataset;
+  d.name = case_name.empty() ? sequence.motion : case_name;
+  d.root = "<memory>";
+  d.kind = DatasetKind::kSynthetic;
+  d.camera = sequence.camera;
+  d.imu_params = sequence.imu_params;
+  d.cam_from_imu = sequence.cam_from_imu;
+  d.imu_simulated = true;
+  d.imu_source_note = "simulated IMU (in-memory synthetic sequence)";
+  for (const ImuSample& s : sequence.imu) d.imu.Push(s, "synthetic imu");
+  struct Encoded {
+    std::vector<uchar> image, depth;
+  };
+  auto encoded = std::make_shared<std::vector<Encoded>>();
+  for (size_t i = 0; i < sequence.frames.size(); ++i) {
+    const SyntheticFrame& f = sequence.frames[i];
+    FrameRecord r;
+    r.t_ns = f.t_ns;
+    r.image_path = "<memory>/rgb/" + std::to_string(i) + ".png";
+    r.depth_path = "<memory>/depth/" + std::to_string(i) + ".png";
+    r.world_from_cam = f.world_from_cam;
+    r.imu_velocity_in_world = f.imu_velocity_in_world;
+    d.frames.push_back(r);
+    d.groundtruth_world_from_cam.push_back({f.t_ns, f.world_from_cam});
+    Encoded e;
+    cv::imencode(".png", f.rgb, e.image);
+    cv::imencode(".png", f.depth, e.depth);
+    encoded->push_back(std::move(e));
+  }
+  source.reader = [encoded](size_t index, bool with_depth) {
+    IMUMATCH_CHECK(index < encoded->size(), "frame index " << index);
+    FrameImages out;
+    out.image = cv::imdecode((*encoded)[index].image, cv::IMREAD_GRAYSCALE);
+    if (with_depth) out.depth = cv::imdecode((*encoded)[index].depth, cv::IMREAD_UNCHANGED);
+    return out;
+  };
+  source.exact_ground_truth = true;
+  return source;
+}
+
+}  // namespace imumatch

@@ -1,0 +1,48 @@
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "imumatch/eval/evaluation_options.h"
+#include "imumatch/eval/pair_selection.h"
+#include "imumatch/imu/camera_motion.h"
+#include "imumatch/io/dataset.h"
+
+namespace imumatch {
+
+// The IMU's velocity at a frame: the dataset's value, else a finite difference of the
+// ground-truth poses of the neighbouring frames (IMU origin = world_from_cam * cam_from_imu).
+std::optional<Eigen::Vector3d> ImuVelocityAt(const Dataset& dataset, size_t index);
+
+// The IMU bias the integration removes. A recorded IMU log that starts at rest (every EuRoC
+// sequence: the vehicle stands on the ground) tells the gyro bias: the mean gyro over the still
+// period (InitializeFromStill, which also rejects a start that is not still). The accelerometer
+// bias is not observable from one still period and stays zero (its sigma goes into the motion's
+// covariance). A simulated IMU, or a log that does not start still, keeps a zero bias and the
+// note says so.
+struct ImuBiasEstimate {
+  ImuBias bias;
+  bool from_still_start = false;
+  double gyro_bias_sigma = 0.0;  // standard error of the estimate (rad/s)
+  std::string note;              // one line for the report
+};
+// still_s: the length of the still period at the start of the IMU log (seconds; 0 = no estimate).
+ImuBiasEstimate EstimateImuBias(const Dataset& dataset, double still_s);
+
+struct PairMotion {
+  CameraMotion motion;
+  double ms = 0.0;
+};
+
+// The motion the predictor is given for a frame pair, or nullopt with a skip reason: the exact
+// ground-truth motion (MotionSource::kGroundTruth), or the dataset's IMU integrated from the state
+// at frame A (the ground truth perturbed by the stated sigmas, seeded with seed + pair index) with
+// the bias `bias` removed.
+std::optional<PairMotion> ComputePairMotion(const Dataset& dataset, const FramePair& pair,
+                                            size_t pair_index, const EvaluationOptions& options,
+                                            const ImuBias& bias, std::string& reason);
+
+}  // namespace imumatch
