@@ -101,7 +101,46 @@ bool PinholeCamera::IsInside(const Eigen::Vector2d& uv, double margin) const {
          uv.y() < height - 0.5 - margin;
 }
 
+void PinholeCamera::IdealImageBounds(double step_px, Eigen::Vector2d* min_xy,
+                                     Eigen::Vector2d* max_xy) const {
+  IMUMATCH_CHECK(std::isfinite(step_px) && step_px > 0.0, "step_px=" << step_px);
+  const double w = width - 0.5, h = height - 0.5;
+  if (!HasDistortion()) {
+    *min_xy = Eigen::Vector2d(-0.5, -0.5);
+    *max_xy = Eigen::Vector2d(w, h);
+    return;
+  }
+  *min_xy = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+  *max_xy = -*min_xy;
+  auto extend = [&](double u, double v) {
+    const Eigen::Vector2d p = PixelToIdeal(Eigen::Vector2d(u, v));
+    *min_xy = min_xy->cwiseMin(p);
+    *max_xy = max_xy->cwiseMax(p);
+  };
+  for (double u = -0.5; u < w; u += step_px) {
+    extend(u, -0.5);
+    extend(u, h);
+  }
+  for (double v = -0.5; v < h; v += step_px) {
+    extend(-0.5, v);
+    extend(w, v);
+  }
+  extend(w, h);
+}
+
 PinholeCamera PinholeCamera::KinectDefault() { return PinholeCamera{}; }
+
+PinholeCamera PinholeCamera::EurocCam0() {
+  PinholeCamera c;
+  c.width = 752;
+  c.height = 480;
+  c.fx = 458.654;
+  c.fy = 457.296;
+  c.cx = 367.215;
+  c.cy = 248.375;
+  c.distortion = {-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05, 0.0};
+  return c;
+}
 
 PinholeCamera PinholeCamera::TumFreiburg1() {
   PinholeCamera c;

@@ -62,6 +62,10 @@ struct PinholeCamera {
   Eigen::Vector2d PixelToIdeal(const Eigen::Vector2d& uv) const {
     return NormalizedToIdeal(PixelToNormalized(uv));
   }
+  // The axis-aligned box in ideal pixels that holds the image [-0.5, w-0.5) x [-0.5, h-0.5): the
+  // border mapped to ideal pixels every step_px (a barrel lens reaches further out at the
+  // corners than at the edge midpoints). min_xy / max_xy receive the corners.
+  void IdealImageBounds(double step_px, Eigen::Vector2d* min_xy, Eigen::Vector2d* max_xy) const;
   // d ideal / d image pixel at the ideal pixel `ideal`: K J^-1 K^-1 with J the distortion's
   // Jacobian. It maps image-pixel noise (keypoint localisation) into ideal pixels.
   Eigen::Matrix2d IdealFromPixelJacobian(const Eigen::Vector2d& ideal) const;
@@ -71,6 +75,10 @@ struct PinholeCamera {
   // True when uv lies inside the image shrunk by margin pixels on each side.
   bool IsInside(const Eigen::Vector2d& uv, double margin = 0.0) const;
 
+  // EuRoC MAV cam0 (the same calibration in every sequence; mav0/cam0/sensor.yaml): 752x480,
+  // fx=458.654 fy=457.296 cx=367.215 cy=248.375, radial-tangential d = -0.28340811 0.07395907
+  // 0.00019359 1.76187114e-05.
+  static PinholeCamera EurocCam0();
   // The generic Kinect v1 values (fx=fy=525, cx=319.5, cy=239.5) and the TUM fr1 calibration
   // (fx=517.3 fy=516.5 cx=318.6 cy=255.3, d = 0.2624 -0.9531 -0.0054 0.0026 1.1633).
   static PinholeCamera KinectDefault();

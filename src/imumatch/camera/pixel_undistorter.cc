@@ -29,24 +29,12 @@ PixelUndistorter::PixelUndistorter(const PinholeCamera& camera, double cell_px) 
     }
   }
   // The image border mapped to ideal pixels, sampled every pixel: its bounding box.
-  min_x_ = min_y_ = std::numeric_limits<double>::infinity();
-  max_x_ = max_y_ = -std::numeric_limits<double>::infinity();
-  auto extend = [&](double u, double v) {
-    const Eigen::Vector2d p = camera.PixelToIdeal(Eigen::Vector2d(u, v));
-    min_x_ = std::min(min_x_, p.x());
-    max_x_ = std::max(max_x_, p.x());
-    min_y_ = std::min(min_y_, p.y());
-    max_y_ = std::max(max_y_, p.y());
-  };
-  const double w = camera.width - 0.5, h = camera.height - 0.5;
-  for (double u = -0.5; u <= w; u += 1.0) {
-    extend(u, -0.5);
-    extend(u, h);
-  }
-  for (double v = -0.5; v <= h; v += 1.0) {
-    extend(-0.5, v);
-    extend(w, v);
-  }
+  Eigen::Vector2d lo, hi;
+  camera.IdealImageBounds(1.0, &lo, &hi);
+  min_x_ = lo.x();
+  min_y_ = lo.y();
+  max_x_ = hi.x();
+  max_y_ = hi.y();
   const double jac_cell = 16.0;
   inv_jac_cell_ = 1.0 / jac_cell;
   jac_cols_ = static_cast<int>(std::ceil((max_x_ - min_x_) / jac_cell)) + 1;

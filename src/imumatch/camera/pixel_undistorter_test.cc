@@ -8,21 +8,8 @@
 namespace imumatch {
 namespace {
 
-// EuRoC MH_05 cam0 (mav0/cam0/sensor.yaml): a strong barrel lens, k1 = -0.28.
-PinholeCamera EurocCam0() {
-  PinholeCamera c;
-  c.width = 752;
-  c.height = 480;
-  c.fx = 458.654;
-  c.fy = 457.296;
-  c.cx = 367.215;
-  c.cy = 248.375;
-  c.distortion = {-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05, 0.0};
-  return c;
-}
-
 TEST(PinholeCamera, DistortionJacobianMatchesFiniteDifferences) {
-  for (const PinholeCamera& cam : {EurocCam0(), PinholeCamera::TumFreiburg1()}) {
+  for (const PinholeCamera& cam : {PinholeCamera::EurocCam0(), PinholeCamera::TumFreiburg1()}) {
     for (const Eigen::Vector2d& xy :
          {Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(0.6, -0.4), Eigen::Vector2d(-0.8, 0.5)}) {
       Eigen::Matrix2d j;
@@ -39,7 +26,7 @@ TEST(PinholeCamera, DistortionJacobianMatchesFiniteDifferences) {
 }
 
 TEST(PixelUndistorter, AgreesWithTheForwardModelEverywhereInTheImage) {
-  const PinholeCamera cam = EurocCam0();
+  const PinholeCamera cam = PinholeCamera::EurocCam0();
   const PixelUndistorter undistorter(cam);
   EXPECT_FALSE(undistorter.identity());
   double worst = 0.0;
@@ -87,7 +74,7 @@ TEST(PixelUndistorter, IsTheIdentityWithoutDistortion) {
 }
 
 TEST(PinholeCamera, IdealFromPixelJacobianStretchesTheCornersOfABarrelLens) {
-  const PinholeCamera cam = EurocCam0();
+  const PinholeCamera cam = PinholeCamera::EurocCam0();
   // Centre: no stretch. Corner: a barrel lens squeezes the periphery, so one image pixel covers
   // more than one ideal pixel radially.
   EXPECT_TRUE(cam.IdealFromPixelJacobian(Eigen::Vector2d(cam.cx, cam.cy))

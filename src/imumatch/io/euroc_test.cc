@@ -322,3 +322,22 @@ TEST(Euroc, GroundTruthCsvHasQuaternionWFirst) {
 
 }  // namespace
 }  // namespace imumatch
+
+namespace imumatch {
+namespace {
+
+TEST(Euroc, Mh05Cam0IsTheNamedEurocCamera) {
+  const EurocCameraSensor s =
+      ReadEurocCameraSensor(testing::DataPath("euroc_mh05_flight/mav0/cam0/sensor.yaml"));
+  const PinholeCamera named = PinholeCamera::EurocCam0();
+  EXPECT_EQ(s.camera.width, named.width);
+  EXPECT_EQ(s.camera.height, named.height);
+  EXPECT_DOUBLE_EQ(s.camera.fx, named.fx);
+  EXPECT_DOUBLE_EQ(s.camera.fy, named.fy);
+  EXPECT_DOUBLE_EQ(s.camera.cx, named.cx);
+  EXPECT_DOUBLE_EQ(s.camera.cy, named.cy);
+  for (size_t i = 0; i < 5; ++i) EXPECT_DOUBLE_EQ(s.camera.distortion[i], named.distortion[i]);
+}
+
+}  // namespace
+}  // namespace imumatch

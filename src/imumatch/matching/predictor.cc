@@ -106,32 +106,14 @@ KeypointPredictor::KeypointPredictor(const PinholeCamera& camera, const CameraMo
     : camera_(camera), options_(options) {
   camera.Check();
   distorted_ = camera.HasDistortion();
-  if (distorted_) {
-    // The ideal image's bounding box from its border, every 4 px (the box only bounds the search
-    // regions; the exact test is done on the distorted position).
-    min_x_ = min_y_ = std::numeric_limits<double>::infinity();
-    max_x_ = max_y_ = -std::numeric_limits<double>::infinity();
-    auto extend = [&](double u, double v) {
-      const Eigen::Vector2d p = camera.PixelToIdeal(Eigen::Vector2d(u, v));
-      min_x_ = std::min(min_x_, p.x());
-      max_x_ = std::max(max_x_, p.x());
-      min_y_ = std::min(min_y_, p.y());
-      max_y_ = std::max(max_y_, p.y());
-    };
-    const double w = camera.width - 0.5, h = camera.height - 0.5;
-    for (double u = -0.5; u < w; u += 4.0) {
-      extend(u, -0.5);
-      extend(u, h);
-    }
-    for (double v = -0.5; v < h; v += 4.0) {
-      extend(-0.5, v);
-      extend(w, v);
-    }
-    extend(w, h);
-  } else {
-    max_x_ = camera.width - 0.5;
-    max_y_ = camera.height - 0.5;
-  }
+  // The ideal image's bounding box from its border every 4 px (the box only bounds the search
+  // regions; the exact inside test is done on the distorted position).
+  Eigen::Vector2d lo, hi;
+  camera.IdealImageBounds(4.0, &lo, &hi);
+  min_x_ = lo.x();
+  min_y_ = lo.y();
+  max_x_ = hi.x();
+  max_y_ = hi.y();
   Init(motion);
 }
 

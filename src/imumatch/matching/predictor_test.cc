@@ -158,25 +158,12 @@ TEST(PredictorTest, EpipolarSegmentContainsTrueProjectionForDepthsInRange) {
   EXPECT_EQ(inside, tested);
 }
 
-// EuRoC MH_05 cam0: a strong barrel lens (k1 = -0.28).
-PinholeCamera EurocCam0() {
-  PinholeCamera c;
-  c.width = 752;
-  c.height = 480;
-  c.fx = 458.654;
-  c.fy = 457.296;
-  c.cx = 367.215;
-  c.cy = 248.375;
-  c.distortion = {-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05, 0.0};
-  return c;
-}
-
 TEST(PredictorTest, DistortedLensPredictsInIdealPixels) {
   // Points at random depths seen through the EuRoC lens: the truth is the camera model's own
   // projection. In ideal pixels it lies on the straight epipolar segment; in image pixels the
   // same points bend away from any straight segment by several pixels near the borders, which is
   // why the predictor and the grid work in ideal pixels.
-  const PinholeCamera cam = EurocCam0();
+  const PinholeCamera cam = PinholeCamera::EurocCam0();
   const PixelUndistorter undistorter(cam);
   const CameraMotion motion = MakeMotion(FromEulerZYX(0.02, 0.01, -0.015), {0.12, 0.03, 0.04});
   const KeypointPredictor predictor(undistorter, motion, PredictionOptions());
@@ -218,7 +205,7 @@ TEST(PredictorTest, DistortedLensPredictsInIdealPixels) {
 }
 
 TEST(PredictorTest, KeypointNoiseGrowsWithSizeAndTowardsTheLensBorder) {
-  const PinholeCamera cam = EurocCam0();
+  const PinholeCamera cam = PinholeCamera::EurocCam0();
   const PixelUndistorter undistorter(cam);
   const CameraMotion motion = MakeMotion(Eigen::Quaterniond::Identity(), {0.05, 0.0, 0.0});
   PredictionOptions options;

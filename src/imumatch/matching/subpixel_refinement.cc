@@ -12,7 +12,6 @@ namespace imumatch {
 
 void SubpixelOptions::Check() const {
   IMUMATCH_CHECK(half_size >= 2 && half_size <= 15, "half_size=" << half_size);
-  IMUMATCH_CHECK(std::isfinite(max_stride) && max_stride >= 1.0, "max_stride=" << max_stride);
   IMUMATCH_CHECK(max_iterations >= 1 && max_iterations <= 100, "max_iterations=" << max_iterations);
   IMUMATCH_CHECK(std::isfinite(convergence_px) && convergence_px > 0.0,
                  "convergence_px=" << convergence_px);
@@ -62,11 +61,13 @@ inline bool BoxInside(const cv::Mat& img, float cx, float cy, float min_x, float
 }  // namespace
 
 // Inverse-compositional Lucas-Kanade on the translation with zero-mean, unit-variance
-// intensities. With T the normalised template, g its gradients (per template sample step) and
-// I the samples of B at the current position, the Gauss-Newton step is
+// intensities. The template is A's patch warped into B's frame once (A sampled at
+// ka + M^-1 q for q on B's unit grid, M the predicted affine map), so every iteration samples B
+// on an axis-aligned grid with one set of bilinear weights. With T the normalised template, g its
+// gradients and I the samples of B at the current position, the Gauss-Newton step is
 //   delta = H^-1 sum_k g_k (I'_k - T_k),  I'_k = (I_k - mean) / sd,  H = sum_k g_k g_k^T,
 // and sum_k g_k I'_k = (sum_k g_k I_k - mean sum_k g_k) / sd, so one pass over the samples
-// (sums of I, I^2 and g I) gives the step. The position moves by -(stride A) delta.
+// (sums of I, I^2 and g I) gives the step; the position moves by -delta.
 SubpixelStats RefineMatches(const cv::Mat& gray_a, const cv::Mat& gray_b,
                             const std::vector<cv::KeyPoint>& keypoints_a,
                             const std::vector<cv::KeyPoint>& keypoints_b,
@@ -84,17 +85,15 @@ SubpixelStats RefineMatches(const cv::Mat& gray_a, const cv::Mat& gray_b,
   const int side = 2 * h + 1, ext = side + 2;  // template plus a one-sample ring for gradients
   const size_t n = static_cast<size_t>(side) * side;
   const float inv_n = 1.0f / static_cast<float>(n);
-  float reference = std::numeric_limits<float>::infinity();
-  for (const cv::KeyPoint& k : keypoints_a) {
-    if (k.size > 0.0f) reference = std::min(reference, k.size);
-  }
   const bool distorted = camera.HasDistortion();
   const uint8_t* data_a = gray_a.ptr<uint8_t>();
   const uint8_t* data_b = gray_b.ptr<uint8_t>();
-  const size_t step_a = gray_a.step[0], step_b_bytes = gray_b.step[0];
+  const size_t step_a = gray_a.step[0], step_b = gray_b.step[0];
   const float conv2 = static_cast<float>(options.convergence_px * options.convergence_px);
   const float slow2 = 25.0f * conv2;
-  std::vector<float> ring(static_cast<size_t>(ext) * ext), gx(n), gy(n), ox(n), oy(n), target(n);
+  const float max_shift2 = static_cast<float>(options.max_shift_px * options.max_shift_px);
+  const float reach = static_cast<float>(h + 1);
+  std::vector<float> ring(static_cast<size_t>(ext) * ext), gx(n), gy(n), target(n);
   std::vector<char> drop(matches.size(), 0);
   for (size_t mi = 0; mi < matches.size(); ++mi) {
     Match& m = matches[mi];
@@ -104,10 +103,6 @@ SubpixelStats RefineMatches(const cv::Mat& gray_a, const cv::Mat& gray_b,
                    "match index outside the keypoints");
     const cv::KeyPoint& ka = keypoints_a[static_cast<size_t>(m.query_idx)];
     const cv::KeyPoint& kb = keypoints_b[static_cast<size_t>(m.train_idx)];
-    float stride = 1.0f;
-    if (ka.size > 0.0f && std::isfinite(reference)) {
-      stride = std::clamp(ka.size / reference, 1.0f, static_cast<float>(options.max_stride));
-    }
     // d pixel_b / d pixel_a: the prediction's affine map in ideal pixels, conjugated by the lens.
     Eigen::Matrix2f affine = Eigen::Matrix2f::Identity();
     if (!predictions.empty()) {
@@ -124,32 +119,36 @@ SubpixelStats RefineMatches(const cv::Mat& gray_a, const cv::Mat& gray_b,
         }
       }
     }
-    const Eigen::Matrix2f step_b = stride * affine;  // B offset per template sample step
-    // A warp that moves no sample by more than 0.05 px from the unit grid is a translation: B is
-    // then sampled on a grid with one set of weights (several times faster).
-    const bool translation_only =
-        stride == 1.0f &&
-        (step_b - Eigen::Matrix2f::Identity()).cwiseAbs().maxCoeff() * static_cast<float>(2 * h) <
-            0.05f;
-    // Template on the extended grid (one bounds test for the whole grid).
-    const float reach = stride * static_cast<float>(h + 1);
-    if (!BoxInside(gray_a, ka.pt.x, ka.pt.y, -reach, reach, -reach, reach)) {
+    const float det_a = affine.determinant();
+    if (!(std::fabs(det_a) > 1e-3f)) {
+      ++stats.failed_texture;  // a degenerate warp: nothing to align
+      continue;
+    }
+    const Eigen::Matrix2f inv = affine.inverse();  // B offset -> A offset
+    // A warp that moves no template sample by more than 0.05 px is the identity: A's patch is
+    // then read on a grid too.
+    const bool identity =
+        (inv - Eigen::Matrix2f::Identity()).cwiseAbs().maxCoeff() * static_cast<float>(2 * h) <
+        0.05f;
+    const float reach_a = reach * inv.cwiseAbs().rowwise().sum().maxCoeff();
+    if (!BoxInside(gray_a, ka.pt.x, ka.pt.y, -reach_a, reach_a, -reach_a, reach_a)) {
       ++stats.failed_border;
       continue;
     }
-    if (stride == 1.0f) {
-      SampleGrid(data_a, step_a, ka.pt.x - static_cast<float>(h + 1),
-                 ka.pt.y - static_cast<float>(h + 1), ext, ext, ring.data());
+    if (identity) {
+      SampleGrid(data_a, step_a, ka.pt.x - reach, ka.pt.y - reach, ext, ext, ring.data());
     } else {
       for (int r = 0; r < ext; ++r) {
-        const float y = ka.pt.y + stride * static_cast<float>(r - h - 1);
+        const float qy = static_cast<float>(r - h - 1);
         for (int c = 0; c < ext; ++c) {
+          const float qx = static_cast<float>(c - h - 1);
           ring[static_cast<size_t>(r) * ext + c] =
-              SampleUnchecked(data_a, step_a, ka.pt.x + stride * static_cast<float>(c - h - 1), y);
+              SampleUnchecked(data_a, step_a, ka.pt.x + inv(0, 0) * qx + inv(0, 1) * qy,
+                              ka.pt.y + inv(1, 0) * qx + inv(1, 1) * qy);
         }
       }
     }
-    // Normalised template statistics and its gradients (central differences).
+    // Normalised template statistics and its gradients (central differences, B's pixels).
     float sum = 0.0f, sum2 = 0.0f;
     for (int r = 1; r <= side; ++r) {
       for (int c = 1; c <= side; ++c) {
@@ -167,7 +166,6 @@ SubpixelStats RefineMatches(const cv::Mat& gray_a, const cv::Mat& gray_b,
     const float inv_sd_t = 1.0f / std::sqrt(var_t);
     float h00 = 0.0f, h01 = 0.0f, h11 = 0.0f, gsum_x = 0.0f, gsum_y = 0.0f, gt_x = 0.0f,
           gt_y = 0.0f;
-    float off_min_x = 0.0f, off_max_x = 0.0f, off_min_y = 0.0f, off_max_y = 0.0f;
     for (int r = 0; r < side; ++r) {
       for (int c = 0; c < side; ++c) {
         const size_t e = static_cast<size_t>(r + 1) * ext + c + 1;
@@ -184,12 +182,6 @@ SubpixelStats RefineMatches(const cv::Mat& gray_a, const cv::Mat& gray_b,
         gsum_y += dy;
         gt_x += dx * t;
         gt_y += dy * t;
-        ox[k] = step_b(0, 0) * static_cast<float>(c - h) + step_b(0, 1) * static_cast<float>(r - h);
-        oy[k] = step_b(1, 0) * static_cast<float>(c - h) + step_b(1, 1) * static_cast<float>(r - h);
-        off_min_x = std::min(off_min_x, ox[k]);
-        off_max_x = std::max(off_max_x, ox[k]);
-        off_min_y = std::min(off_min_y, oy[k]);
-        off_max_y = std::max(off_max_y, oy[k]);
       }
     }
     // Texture in both directions: the smaller eigenvalue of the Hessian per sample.
@@ -207,19 +199,14 @@ SubpixelStats RefineMatches(const cv::Mat& gray_a, const cv::Mat& gray_b,
     float last_move2 = std::numeric_limits<float>::infinity();
     for (int it = 0; it < options.max_iterations; ++it) {
       ++stats.iterations;
-      if (!BoxInside(gray_b, x, y, off_min_x, off_max_x, off_min_y, off_max_y)) {
+      if (!BoxInside(gray_b, x, y, -static_cast<float>(h), static_cast<float>(h),
+                     -static_cast<float>(h), static_cast<float>(h))) {
         ok = false;
         break;
       }
+      SampleGrid(data_b, step_b, x - static_cast<float>(h), y - static_cast<float>(h), side, side,
+                 target.data());
       float s1 = 0.0f, s2 = 0.0f, sgx = 0.0f, sgy = 0.0f;
-      if (translation_only) {
-        SampleGrid(data_b, step_b_bytes, x - static_cast<float>(h), y - static_cast<float>(h), side,
-                   side, target.data());
-      } else {
-        for (size_t k = 0; k < n; ++k) {
-          target[k] = SampleUnchecked(data_b, step_b_bytes, x + ox[k], y + oy[k]);
-        }
-      }
       for (size_t k = 0; k < n; ++k) {
         const float v = target[k];
         s1 += v;
@@ -236,9 +223,7 @@ SubpixelStats RefineMatches(const cv::Mat& gray_a, const cv::Mat& gray_b,
       const float inv_sd_i = 1.0f / std::sqrt(var_i);
       const float bx = (sgx - mean_i * gsum_x) * inv_sd_i - gt_x;
       const float by = (sgy - mean_i * gsum_y) * inv_sd_i - gt_y;
-      const float dx = i00 * bx + i01 * by, dy = i01 * bx + i11 * by;
-      const float mx = step_b(0, 0) * dx + step_b(0, 1) * dy;
-      const float my = step_b(1, 0) * dx + step_b(1, 1) * dy;
+      const float mx = i00 * bx + i01 * by, my = i01 * bx + i11 * by;
       x -= mx;
       y -= my;
       if (!std::isfinite(x) || !std::isfinite(y)) {
@@ -259,8 +244,7 @@ SubpixelStats RefineMatches(const cv::Mat& gray_a, const cv::Mat& gray_b,
     // a few hundredths of a pixel.
     if (!converged) converged = last_move2 < slow2;
     const float sx = x - kb.pt.x, sy = y - kb.pt.y;
-    const float max_shift = static_cast<float>(options.max_shift_px) * stride;
-    if (!converged || sx * sx + sy * sy > max_shift * max_shift) {
+    if (!converged || sx * sx + sy * sy > max_shift2) {
       ++stats.failed_convergence;
       drop[mi] = options.drop_unaligned ? 1 : 0;
       continue;

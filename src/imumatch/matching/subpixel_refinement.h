@@ -21,29 +21,27 @@ namespace imumatch {
 // where A's patch (centred on A's keypoint) is seen in B: the correspondence then refers to one
 // physical point in both frames.
 //
-// Per match: a (2h+1)^2 patch of A around the keypoint, sampled with a stride equal to the
-// keypoint's scale relative to the frame's finest keypoint (1..max_stride px), is warped into B
-// by the prediction's local affine map (the IMU's in-plane rotation and scale change, lens
-// distortion included; identity without a prediction) and aligned by inverse-compositional
-// Lucas-Kanade on the translation, on zero-mean unit-variance intensities (gain and bias of the
-// exposure cancel). The match keeps its keypoints; Match::refined_uv_b receives the refined
-// position (image pixels). A match whose alignment fails (patch leaves an image, no texture, no
-// convergence, or it moves farther than max_shift_px x stride) keeps refined_uv_b NaN.
+// Per match: A's (2h+1)^2 patch around the keypoint, warped into B by the prediction's local
+// affine map (the IMU's in-plane rotation and scale change, lens distortion included; identity
+// without a prediction), is aligned by inverse-compositional Lucas-Kanade on the translation, on
+// zero-mean unit-variance intensities (gain and bias of the exposure cancel). The match keeps its
+// keypoints; Match::refined_uv_b receives the refined position (image pixels). A match whose
+// alignment fails (patch leaves an image, no texture, no convergence, or it moves farther than
+// max_shift_px) keeps refined_uv_b NaN.
 struct SubpixelOptions {
   int half_size = 4;  // 9 x 9 samples
-  // Sampling step cap (px of level 0). 1: every keypoint gets an image-resolution patch. Measured
-  // on the synthetic seed cases, strides up to 2 or 4 for coarse keypoints (unblurred sampling)
-  // lost 1-6 % of SIFT's correct matches to failed alignments and gained no precision.
-  double max_stride = 1.0;
+  // Patches are sampled at image resolution whatever the keypoint's scale: measured on the
+  // synthetic seed cases, patches spread over 2-4 px steps for coarse keypoints (unblurred) lost
+  // 1-6 % of SIFT's correct matches to failed alignments and gained no precision.
   int max_iterations = 10;
   double convergence_px = 0.03;
-  // Farthest move (px per stride unit) of a converged alignment: a correct match is within the
-  // judge's few pixels; farther means A's patch was found elsewhere.
+  // Farthest move (px) of a converged alignment: a correct match is within a few pixels;
+  // farther means A's patch was found elsewhere.
   double max_shift_px = 4.0;
   // The patch must have texture in both directions: the smaller eigenvalue of the normalised
   // template's gradient Hessian per sample (a unit-variance patch of pure noise gives about 1).
   double min_texture = 0.02;
-  // Drop the matches whose alignment did not converge within max_shift_px x stride: A's patch is
+  // Drop the matches whose alignment did not converge within max_shift_px: A's patch is
   // not found near B's keypoint, a photometric sign of a false match. Matches left unrefined for
   // lack of texture or at the image border are kept.
   bool drop_unaligned = true;
