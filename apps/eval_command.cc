@@ -230,7 +230,13 @@ void RunEval(const std::string& path, CommonArgs a, double interval_s, int step,
     EndToEndOptions e;
     e.max_frames = static_cast<size_t>(a.e2e_frames);
     e.first_frame = pairs.front().a;
-    context.end_to_end = MeasureEndToEnd(source, o, e);
+    try {
+      context.end_to_end = MeasureEndToEnd(source, o, e);
+    } catch (const InputError& err) {
+      // The per-pair evaluation already listed the unreadable frame as skipped; the timing stream
+      // needs every frame, so it is left out with the reason.
+      result.notes.push_back(std::string("end-to-end timing not measured: ") + err.what());
+    }
   }
   context.config.push_back({"dataset", path});
   context.config.push_back({"pairs", interval_s > 0

@@ -3,6 +3,7 @@
 #include "imumatch/core/time.h"
 #include "imumatch/eval/end_to_end.h"
 #include "imumatch/eval/pair_motion.h"
+#include "imumatch/eval/pipelined.h"
 #include "imumatch/eval/summary.h"
 #include "imumatch/io/dataset.h"
 #include "imumatch/testing/test_data.h"
@@ -95,6 +96,32 @@ TEST(EvaluationTest, MethodAndMotionSourceNames) {
   EvaluationOptions o;
   o.detectors.clear();
   EXPECT_THROW(o.Check(), InvalidArgument);
+}
+
+TEST(EvaluationTest, AReaderThreadErrorReachesTheCaller) {
+  // The producer runs on its own thread; its exception must come back to the caller (not end
+  // the process), after the items read before it were consumed.
+  std::vector<int> seen;
+  EXPECT_THROW(RunPipelined<int>(
+                   5, 2,
+                   [](size_t i) -> int {
+                     if (i == 3) throw InputError("frame3.png", "unreadable");
+                     return static_cast<int>(i);
+                   },
+                   [&](int v) { seen.push_back(v); }),
+               InputError);
+  EXPECT_EQ(seen, (std::vector<int>{0, 1, 2}));
+  // Inline (capacity 0) the same.
+  seen.clear();
+  EXPECT_THROW(RunPipelined<int>(
+                   5, 0,
+                   [](size_t i) -> int {
+                     if (i == 1) throw InputError("frame1.png", "unreadable");
+                     return static_cast<int>(i);
+                   },
+                   [&](int v) { seen.push_back(v); }),
+               InputError);
+  EXPECT_EQ(seen, (std::vector<int>{0}));
 }
 
 TEST(EvaluationTest, WindowRecallCountsTheCorrectBruteForcePartnersInside) {

@@ -8,7 +8,9 @@
 #include <condition_variable>
 #include <cstddef>
 #include <deque>
+#include <exception>
 #include <mutex>
+#include <optional>
 #include <thread>
 #include <utility>
 
@@ -56,29 +58,46 @@ class BoundedQueue {
   bool closed_ = false;
 };
 
-// Runs producer(i, queue) for i in [0, n) on its own thread (or inline when capacity is 0) and
-// hands the items to the consumer in order. The reader stops early when the consumer throws.
+// Runs producer(i) for i in [0, n) on its own thread (or inline when capacity is 0) and hands the
+// items to the consumer in order. The reader stops early when the consumer throws; a producer's
+// exception is rethrown in the calling thread.
 template <typename T, typename Producer, typename Consumer>
 void RunPipelined(size_t n, int capacity, Producer producer, Consumer consumer) {
   if (capacity <= 0) {
     for (size_t i = 0; i < n; ++i) consumer(producer(i));
     return;
   }
-  BoundedQueue<T> queue(static_cast<size_t>(capacity));
+  // An exception thrown by the producer (an unreadable file) must not end the process from the
+  // reader thread: it travels through the queue as an empty item and is rethrown here, in the
+  // consumer's thread, where the caller can catch it.
+  BoundedQueue<std::optional<T>> queue(static_cast<size_t>(capacity));
+  std::exception_ptr error;
   std::thread reader([&] {
     for (size_t i = 0; i < n; ++i) {
-      if (!queue.Push(producer(i))) return;
+      std::optional<T> item;
+      try {
+        item.emplace(producer(i));
+      } catch (...) {
+        error = std::current_exception();
+        queue.Push(std::nullopt);
+        return;
+      }
+      if (!queue.Push(std::move(item))) return;
     }
   });
   struct Joiner {
-    BoundedQueue<T>& q;
+    BoundedQueue<std::optional<T>>& q;
     std::thread& t;
     ~Joiner() {
       q.Close();
       t.join();
     }
   } joiner{queue, reader};
-  for (size_t i = 0; i < n; ++i) consumer(queue.Pop());
+  for (size_t i = 0; i < n; ++i) {
+    std::optional<T> item = queue.Pop();
+    if (!item) std::rethrow_exception(error);  // written before the push that woke us
+    consumer(std::move(*item));
+  }
 }
 
 }  // namespace imumatch
