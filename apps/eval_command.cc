@@ -50,7 +50,8 @@ struct CommonArgs {
   double fixed_half = 10.0;
   double z_min = -1.0, z_max = -1.0;  // < 0: PredictionOptions defaults
   bool no_refine = false;
-  double guided_ratio = -1.0;  // < 0: --ratio
+  double guided_ratio = -1.0;           // < 0: --ratio
+  double orientation_tolerance = -1.0;  // < 0: GuidedMatcherOptions default
   double still_s = 1.0;
   std::string sigma_scaling = "size";
 };
@@ -93,6 +94,9 @@ void AddCommonOptions(CLI::App* cmd, CommonArgs& a) {
   cmd->add_option("--sigma-scaling", a.sigma_scaling,
                   "keypoint localisation noise: size (grows with the keypoint's size) | none")
       ->capture_default_str();
+  cmd->add_option("--orientation-tolerance", a.orientation_tolerance,
+                  "guided: largest keypoint angle change off the predicted one (deg; 180 = no "
+                  "orientation check)");
   cmd->add_flag("--no-refine", a.no_refine,
                 "guided: do not refine matched positions to sub-pixel accuracy");
   cmd->add_option("--still", a.still_s,
@@ -133,6 +137,7 @@ EvaluationOptions MakeOptions(const CommonArgs& a) {
   if (a.z_min >= 0.0) o.prediction.segment_min_depth = a.z_min;
   if (a.z_max >= 0.0) o.prediction.segment_max_depth = a.z_max;
   o.refine_subpixel = !a.no_refine;
+  if (a.orientation_tolerance >= 0.0) o.guided.orientation_tolerance_deg = a.orientation_tolerance;
   if (a.sigma_scaling == "none") {
     o.prediction.sigma_scaling = KeypointSigmaScaling::kNone;
   } else if (a.sigma_scaling == "size") {
