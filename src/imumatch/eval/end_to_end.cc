@@ -37,9 +37,9 @@ EndToEndTiming MeasureEndToEnd(const EvalSource& source, const EvaluationOptions
   e2e.Check();
   options.Check();
   const Dataset& dataset = source.dataset;
-  const ImuBias bias = options.motion_source == MotionSource::kImu
-                           ? EstimateImuBias(dataset, options.still_init_s).bias
-                           : ImuBias();
+  const ImuBiasEstimate bias = options.motion_source == MotionSource::kImu
+                                   ? EstimateImuBias(dataset, options.still_init_s)
+                                   : ImuBiasEstimate();
   EndToEndTiming timing;
   if (e2e.first_frame >= dataset.frames.size()) return timing;
   const size_t n = std::min(e2e.max_frames, dataset.frames.size() - e2e.first_frame);

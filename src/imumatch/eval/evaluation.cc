@@ -247,7 +247,7 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
     }
     std::string reason;
     const std::optional<PairMotion> motion =
-        ComputePairMotion(dataset, pair, index, options, bias.bias, reason);
+        ComputePairMotion(dataset, pair, index, options, bias, reason);
     if (!motion) {
       skip("", reason);
       return report_progress();

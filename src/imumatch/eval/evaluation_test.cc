@@ -174,6 +174,7 @@ TEST(EvaluationTest, GyroBiasFromTheStillStartOfARealLog) {
   EXPECT_GT(e.gyro_bias_sigma, 0.0);
   EXPECT_LT(e.gyro_bias_sigma, 1e-3);
   EXPECT_TRUE(e.bias.accel.isZero());
+  EXPECT_EQ(e.t_ns, d.imu.begin_ns() + 1'000'000'000);  // the bias walks from the still end on
   // 0 s: no estimate, said so.
   const ImuBiasEstimate none = EstimateImuBias(d, 0.0);
   EXPECT_FALSE(none.from_still_start);

@@ -1,6 +1,7 @@
 #include "imumatch/eval/pair_motion.h"
 
 #include <algorithm>
+#include <cmath>
 #include <iomanip>
 #include <random>
 #include <sstream>
@@ -48,6 +49,7 @@ ImuBiasEstimate EstimateImuBias(const Dataset& dataset, double still_s) {
     out.bias = init.bias;
     out.from_still_start = true;
     out.gyro_bias_sigma = init.gyro_bias_sigma;
+    out.t_ns = t1;
     note << "IMU gyro bias from the still start of the log (" << init.num_samples
          << " samples): " << init.bias.gyro.x() << " " << init.bias.gyro.y() << " "
          << init.bias.gyro.z() << " rad/s (+- " << init.gyro_bias_sigma << ")";
@@ -61,7 +63,7 @@ ImuBiasEstimate EstimateImuBias(const Dataset& dataset, double still_s) {
 
 std::optional<PairMotion> ComputePairMotion(const Dataset& dataset, const FramePair& pair,
                                             size_t pair_index, const EvaluationOptions& options,
-                                            const ImuBias& bias, std::string& reason) {
+                                            const ImuBiasEstimate& bias, std::string& reason) {
   const FrameRecord& fa = dataset.frames[pair.a];
   const FrameRecord& fb = dataset.frames[pair.b];
   PairMotion out;
@@ -96,10 +98,17 @@ std::optional<PairMotion> ComputePairMotion(const Dataset& dataset, const FrameP
                                  world_from_imu.translation);
   state.velocity_in_world =
       *velocity + v_sigma * Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
-  state.bias = bias;
+  state.bias = bias.bias;
+  CameraMotionOptions motion_options = options.motion;
+  if (bias.from_still_start) {
+    const double since_s = std::max(0.0, NsToSeconds(fa.t_ns - bias.t_ns));
+    const double walk = dataset.imu_params.gyro_random_walk;
+    motion_options.gyro_bias_sigma =
+        std::sqrt(bias.gyro_bias_sigma * bias.gyro_bias_sigma + walk * walk * since_s);
+  }
   try {
     out.motion = ComputeCameraMotion(dataset.imu, fa.t_ns, fb.t_ns, state, dataset.imu_params,
-                                     dataset.cam_from_imu, options.motion);
+                                     dataset.cam_from_imu, motion_options);
   } catch (const OutOfRange& e) {
     reason = std::string("IMU interval not available: ") + e.what();
     return std::nullopt;

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <string>
 
@@ -27,6 +28,7 @@ struct ImuBiasEstimate {
   ImuBias bias;
   bool from_still_start = false;
   double gyro_bias_sigma = 0.0;  // standard error of the estimate (rad/s)
+  int64_t t_ns = 0;              // end of the still period: the bias then walks (random walk)
   std::string note;              // one line for the report
 };
 // still_s: the length of the still period at the start of the IMU log (seconds; 0 = no estimate).
@@ -40,9 +42,11 @@ struct PairMotion {
 // The motion the predictor is given for a frame pair, or nullopt with a skip reason: the exact
 // ground-truth motion (MotionSource::kGroundTruth), or the dataset's IMU integrated from the state
 // at frame A (the ground truth perturbed by the stated sigmas, seeded with seed + pair index) with
-// the bias `bias` removed.
+// the estimated bias removed. With a bias from the still start, the gyro bias sigma the predictor
+// is told is the estimate's standard error grown by the gyro random walk since then,
+// sqrt(sigma^2 + gyro_random_walk^2 (t_a - t_still)), instead of options.motion.gyro_bias_sigma.
 std::optional<PairMotion> ComputePairMotion(const Dataset& dataset, const FramePair& pair,
                                             size_t pair_index, const EvaluationOptions& options,
-                                            const ImuBias& bias, std::string& reason);
+                                            const ImuBiasEstimate& bias, std::string& reason);
 
 }  // namespace imumatch
