@@ -24,7 +24,10 @@ namespace imumatch {
 // Per match: A's (2h+1)^2 patch around the keypoint, warped into B by the prediction's local
 // affine map (the IMU's in-plane rotation and scale change, lens distortion included; identity
 // without a prediction), is aligned by inverse-compositional Lucas-Kanade on the translation, on
-// zero-mean unit-variance intensities (gain and bias of the exposure cancel). The match keeps its
+// zero-mean unit-variance intensities (gain and bias of the exposure cancel). A patch without
+// texture in both directions (the smooth centre of a blob) is tried again at twice the size,
+// where the blob's edges are: on EuRoC MH_05 that lifted precision at 1 px by 0.1-1.0 point
+// (ORB, SURF, BRISK most) for about a third more refinement time. The match keeps its
 // keypoints; Match::refined_uv_b receives the refined position (image pixels). A match whose
 // alignment fails (patch leaves an image, no texture, no convergence, or it moves farther than
 // max_shift_px) keeps refined_uv_b NaN.

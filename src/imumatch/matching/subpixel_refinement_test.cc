@@ -141,6 +141,30 @@ TEST(SubpixelRefinement, ExposureChangeCancels) {
   EXPECT_EQ(refined, static_cast<int>(s.matches.size()));
 }
 
+TEST(SubpixelRefinement, APatchWithoutTextureIsRetriedLarger) {
+  // The keypoint sits in a flat disc of radius 6.5 px inside a textured scene (the smooth centre
+  // of a blob): the 9 x 9 patch sees no texture at all, the 17 x 17 one reaches the texture
+  // around the disc and aligns.
+  cv::Mat a = Texture(5);
+  cv::circle(a, cv::Point(160, 120), 6, cv::Scalar(128), cv::FILLED);
+  const Warped w = Warp(a, 0.0, 1.0, Eigen::Vector2d(1.3, -0.6));
+  std::vector<cv::KeyPoint> kps_a = {cv::KeyPoint(cv::Point2f(160, 120), 20.0f)};
+  std::vector<cv::KeyPoint> kps_b = {cv::KeyPoint(cv::Point2f(161, 119), 20.0f)};
+  std::vector<Match> matches(1);
+  matches[0].query_idx = matches[0].train_idx = 0;
+  const SubpixelStats stats =
+      RefineMatches(a, w.b, kps_a, kps_b, {}, Camera(), SubpixelOptions(), matches);
+  ASSERT_EQ(stats.refined, 1);
+  EXPECT_LT((matches[0].refined_uv_b - Eigen::Vector2f(161.3f, 119.4f)).norm(), 0.05f);
+  // Starting at 5 x 5, the retry is the 9 x 9 patch, still inside the disc: unrefined. So the
+  // default needed its retry.
+  SubpixelOptions small;
+  small.half_size = 2;
+  std::vector<Match> again(1);
+  again[0].query_idx = again[0].train_idx = 0;
+  EXPECT_EQ(RefineMatches(a, w.b, kps_a, kps_b, {}, Camera(), small, again).failed_texture, 1);
+}
+
 TEST(SubpixelRefinement, FlatPatchesAndBordersAreLeftUnrefined) {
   cv::Mat flat(240, 320, CV_8U, cv::Scalar(128));
   std::vector<cv::KeyPoint> kps = {cv::KeyPoint(cv::Point2f(100, 100), 7.0f),
