@@ -158,12 +158,7 @@ std::string MarkdownWindowTable(const std::vector<DetectorPairRecord>& records,
       const WindowRecall w = ComputeWindowRecall(r, run, threshold_px);
       if (w.checked == 0) continue;
       Acc& a = acc[{r.case_name, static_cast<int>(r.detector), static_cast<int>(run.method)}];
-      a.w.checked += w.checked;
-      a.w.inside += w.inside;
-      a.w.missed_with_depth += w.missed_with_depth;
-      a.w.missed_without_depth += w.missed_without_depth;
-      a.w.missed_beyond_segment += w.missed_beyond_segment;
-      a.w.missed_no_prediction += w.missed_no_prediction;
+      a.w.Add(w);
       a.per_pair.push_back(w.Recall());
     }
   }

@@ -77,6 +77,15 @@ RunCounts CountRun(const DetectorPairRecord& record, const MethodRun& run, doubl
   return c;
 }
 
+void WindowRecall::Add(const WindowRecall& other) {
+  checked += other.checked;
+  inside += other.inside;
+  missed_with_depth += other.missed_with_depth;
+  missed_without_depth += other.missed_without_depth;
+  missed_beyond_segment += other.missed_beyond_segment;
+  missed_no_prediction += other.missed_no_prediction;
+}
+
 WindowRecall ComputeWindowRecall(const DetectorPairRecord& record, const MethodRun& run,
                                  double threshold_px) {
   WindowRecall w;
@@ -127,7 +136,7 @@ std::vector<MethodSummary> Summarize(const std::vector<DetectorPairRecord>& reco
     std::vector<double> read, extract, predict, match, total;
     double keypoints = 0, matches = 0, correct = 0, wrong = 0, possible = 0, correct_depth = 0,
            epipolar = 0;
-    int window_checked = 0, window_inside = 0;
+    WindowRecall window;
     int pairs = 0;
   };
   std::map<std::tuple<size_t, int, int>, Acc> acc;
@@ -150,9 +159,7 @@ std::vector<MethodSummary> Summarize(const std::vector<DetectorPairRecord>& reco
       a.possible += c.possible;
       a.correct_depth += c.counts.correct_by_depth;
       a.epipolar += c.counts.matches - c.counts.judged_by_depth;
-      const WindowRecall w = ComputeWindowRecall(r, run, threshold_px);
-      a.window_checked += w.checked;
-      a.window_inside += w.inside;
+      a.window.Add(ComputeWindowRecall(r, run, threshold_px));
       ++a.pairs;
     }
   }
@@ -177,11 +184,9 @@ std::vector<MethodSummary> Summarize(const std::vector<DetectorPairRecord>& reco
     s.precision = a.matches > 0 ? a.correct / a.matches : 0.0;
     s.recall = a.possible > 0 ? std::min(1.0, a.correct_depth / a.possible) : 0.0;
     s.epipolar_fraction = a.matches > 0 ? a.epipolar / a.matches : 0.0;
-    s.window_checked = a.window_checked;
-    s.window_missed = a.window_checked - a.window_inside;
-    if (a.window_checked > 0) {
-      s.window_recall = static_cast<double>(a.window_inside) / a.window_checked;
-    }
+    s.window_checked = a.window.checked;
+    s.window_missed = a.window.checked - a.window.inside;
+    s.window_recall = a.window.Recall();
     out.push_back(s);
   }
   return out;

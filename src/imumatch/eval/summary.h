@@ -64,6 +64,7 @@ struct WindowRecall {
   int missed_beyond_segment = 0;  // of those: on the segment's line, beyond one of its ends
   int missed_no_prediction = 0;   // behind camera B, outside image B, invalid
   double Recall() const { return checked > 0 ? static_cast<double>(inside) / checked : -1.0; }
+  void Add(const WindowRecall& other);
 };
 WindowRecall ComputeWindowRecall(const DetectorPairRecord& record, const MethodRun& run,
                                  double threshold_px);

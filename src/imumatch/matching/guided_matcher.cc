@@ -107,11 +107,7 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
   scored.reserve(256);
   const bool dedup = options.duplicate_radius_px > 0.0;
   const float dup_radius = static_cast<float>(options.duplicate_radius_px);
-  float ref_b = std::numeric_limits<float>::infinity();
-  for (const KeypointInfo& k : keypoints_b) {
-    if (k.size > 0.0f) ref_b = std::min(ref_b, k.size);
-  }
-  if (!std::isfinite(ref_b)) ref_b = 0.0f;
+  const float ref_b = ReferenceKeypointSize(keypoints_b);
 
   for (int i = 0; i < n; ++i) {
     const KeypointPrediction& p = predictions[i];
@@ -284,10 +280,10 @@ MatchResult GuidedMatcherWorkspace::Match(const PinholeCamera& camera, const Cam
   const PixelUndistorter& undistorter = UndistorterFor(camera);
   const KeypointPredictor predictor(undistorter, motion, prediction_options);
   const size_t n = keypoints_a.size();
-  predictions_.resize(n);
-  const bool has_depth_image = !depth_a.empty();
-  if (has_depth_image) {
-    // Depth is registered to the (distorted) image: sampled at the image positions.
+  // Depth is registered to the (distorted) image: sampled at the image positions. No depth image:
+  // no depths (every keypoint is predicted along its epipolar segment).
+  depths_.clear();
+  if (!depth_a.empty()) {
     depths_ =
         SampleDepths(depth_a, camera.depth_scale, keypoints_a, prediction_options.depth_sampling);
   }
@@ -307,13 +303,7 @@ MatchResult GuidedMatcherWorkspace::Match(const PinholeCamera& camera, const Cam
   } else {
     ToIdealKeypointInfos(keypoints_a, undistorter, &info_a_);
   }
-  const float reference = ReferenceKeypointSize(info_a_);
-  for (size_t i = 0; i < n; ++i) {
-    predictions_[i] =
-        predictor.Predict(Eigen::Vector2d(info_a_[i].x, info_a_[i].y),
-                          has_depth_image ? depths_[i] : std::numeric_limits<double>::quiet_NaN(),
-                          KeypointSigmaScale(prediction_options, info_a_[i], reference));
-  }
+  PredictKeypoints(predictor, info_a_, depths_, &predictions_);
   ToIdealKeypointInfos(keypoints_b, undistorter, &info_b_);
   last_b_.resize(keypoints_b.size());
   for (size_t j = 0; j < keypoints_b.size(); ++j) last_b_[j] = keypoints_b[j].pt;

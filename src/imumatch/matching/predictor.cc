@@ -385,31 +385,29 @@ std::vector<KeypointInfo> ToIdealKeypointInfos(const std::vector<cv::KeyPoint>& 
   return out;
 }
 
-namespace {
-std::vector<KeypointPrediction> PredictAll(const KeypointPredictor& predictor,
-                                           const std::vector<KeypointInfo>& keypoints,
-                                           const std::vector<float>& depths_m,
-                                           const PredictionOptions& options) {
+void PredictKeypoints(const KeypointPredictor& predictor,
+                      const std::vector<KeypointInfo>& keypoints,
+                      const std::vector<float>& depths_m, std::vector<KeypointPrediction>* out) {
   IMUMATCH_CHECK(depths_m.empty() || depths_m.size() == keypoints.size(),
                  depths_m.size() << " depths for " << keypoints.size() << " keypoints");
-  std::vector<KeypointPrediction> out(keypoints.size());
+  out->resize(keypoints.size());
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const float reference = ReferenceKeypointSize(keypoints);
   for (size_t i = 0; i < keypoints.size(); ++i) {
     const KeypointInfo& k = keypoints[i];
-    out[i] = predictor.Predict(Eigen::Vector2d(k.x, k.y), depths_m.empty() ? nan : depths_m[i],
-                               KeypointSigmaScale(options, k, reference));
+    (*out)[i] = predictor.Predict(Eigen::Vector2d(k.x, k.y), depths_m.empty() ? nan : depths_m[i],
+                                  KeypointSigmaScale(predictor.options(), k, reference));
   }
-  return out;
 }
-}  // namespace
 
 std::vector<KeypointPrediction> PredictKeypoints(const PinholeCamera& camera,
                                                  const CameraMotion& motion,
                                                  const std::vector<KeypointInfo>& keypoints,
                                                  const std::vector<float>& depths_m,
                                                  const PredictionOptions& options) {
-  return PredictAll(KeypointPredictor(camera, motion, options), keypoints, depths_m, options);
+  std::vector<KeypointPrediction> out;
+  PredictKeypoints(KeypointPredictor(camera, motion, options), keypoints, depths_m, &out);
+  return out;
 }
 
 std::vector<KeypointPrediction> PredictKeypoints(const PixelUndistorter& undistorter,
@@ -417,7 +415,9 @@ std::vector<KeypointPrediction> PredictKeypoints(const PixelUndistorter& undisto
                                                  const std::vector<KeypointInfo>& keypoints,
                                                  const std::vector<float>& depths_m,
                                                  const PredictionOptions& options) {
-  return PredictAll(KeypointPredictor(undistorter, motion, options), keypoints, depths_m, options);
+  std::vector<KeypointPrediction> out;
+  PredictKeypoints(KeypointPredictor(undistorter, motion, options), keypoints, depths_m, &out);
+  return out;
 }
 
 namespace {

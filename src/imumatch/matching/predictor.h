@@ -201,6 +201,11 @@ std::vector<KeypointInfo> ToIdealKeypointInfos(const std::vector<cv::KeyPoint>& 
 void ToIdealKeypointInfos(const std::vector<cv::KeyPoint>& keypoints,
                           const PixelUndistorter& undistorter, std::vector<KeypointInfo>* out);
 
+// Predicts every keypoint of A with the predictor into *out (its capacity reused), each with its
+// KeypointSigmaScale. depths_m: one per keypoint (metres, NaN = none) or empty.
+void PredictKeypoints(const KeypointPredictor& predictor,
+                      const std::vector<KeypointInfo>& keypoints,
+                      const std::vector<float>& depths_m, std::vector<KeypointPrediction>* out);
 // Predicts every keypoint of A (ideal pixels, see KeypointPredictor). depths_m: one per keypoint
 // (metres, NaN = none) or empty (no depth for any). Throws InvalidArgument on size mismatch or bad
 // options.

@@ -58,10 +58,6 @@ inline bool BoxInside(const cv::Mat& img, float cx, float cy, float min_x, float
          cy + max_y < img.rows - 1.001f;
 }
 
-}  // namespace
-
-namespace {
-
 enum class AlignResult { kAligned, kBorder, kTexture, kNoConvergence };
 
 // Scratch buffers of one alignment, sized for the largest patch.
