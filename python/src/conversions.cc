@@ -1,0 +1,161 @@
+#include "conversions.h"
+
+#include <string>
+
+#include "imumatch/core/error.h"
+
+namespace imumatch::python {
+
+namespace {
+
+int DepthOf(const py::dtype& dtype, const char* what) {
+  if (dtype.is(py::dtype::of<uint8_t>())) return CV_8U;
+  if (dtype.is(py::dtype::of<uint16_t>())) return CV_16U;
+  if (dtype.is(py::dtype::of<int16_t>())) return CV_16S;
+  if (dtype.is(py::dtype::of<int32_t>())) return CV_32S;
+  if (dtype.is(py::dtype::of<float>())) return CV_32F;
+  if (dtype.is(py::dtype::of<double>())) return CV_64F;
+  throw InvalidArgument(std::string(what) + ": unsupported dtype " +
+                        py::str(static_cast<py::object>(dtype)).cast<std::string>() +
+                        " (uint8, uint16, int16, int32, float32 or float64)");
+}
+
+}  // namespace
+
+MatView ArrayToMat(const py::handle& object, const char* what) {
+  MatView view;
+  if (object.is_none()) return view;
+  py::array in = py::array::ensure(object);
+  if (!in) throw InvalidArgument(std::string(what) + ": expected a NumPy array");
+  // Contiguous (copies only when the caller's array is strided or not C-ordered).
+  view.array = py::array::ensure(in, py::array::c_style);
+  const py::array& a = view.array;
+  const int depth = DepthOf(a.dtype(), what);
+  if (a.size() == 0) return view;
+  if (a.ndim() == 2) {
+    view.mat = cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)),
+                       CV_MAKETYPE(depth, 1), const_cast<void*>(a.data()));
+  } else if (a.ndim() == 3 && a.shape(2) >= 1 && a.shape(2) <= 4) {
+    view.mat =
+        cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)),
+                CV_MAKETYPE(depth, static_cast<int>(a.shape(2))), const_cast<void*>(a.data()));
+  } else {
+    throw InvalidArgument(std::string(what) +
+                          ": expected a 2-D array (or H x W x C, C <= 4), got " +
+                          std::to_string(a.ndim()) + " dimensions");
+  }
+  return view;
+}
+
+py::array MatToArray(cv::Mat mat) {
+  py::dtype dtype;
+  switch (mat.depth()) {
+    case CV_8U:
+      dtype = py::dtype::of<uint8_t>();
+      break;
+    case CV_16U:
+      dtype = py::dtype::of<uint16_t>();
+      break;
+    case CV_16S:
+      dtype = py::dtype::of<int16_t>();
+      break;
+    case CV_32S:
+      dtype = py::dtype::of<int32_t>();
+      break;
+    case CV_32F:
+      dtype = py::dtype::of<float>();
+      break;
+    case CV_64F:
+      dtype = py::dtype::of<double>();
+      break;
+    default:
+      throw InvalidArgument("matrix of unsupported OpenCV depth " + std::to_string(mat.depth()));
+  }
+  if (mat.empty()) {
+    return py::array(dtype, std::vector<py::ssize_t>{0, std::max(0, mat.cols)});
+  }
+  if (!mat.isContinuous()) mat = mat.clone();
+  const py::ssize_t elem = static_cast<py::ssize_t>(mat.elemSize1());
+  const int channels = mat.channels();
+  std::vector<py::ssize_t> shape{mat.rows, mat.cols};
+  std::vector<py::ssize_t> strides{static_cast<py::ssize_t>(mat.step[0]),
+                                   static_cast<py::ssize_t>(mat.elemSize())};
+  if (channels > 1) {
+    shape.push_back(channels);
+    strides.push_back(elem);
+  }
+  auto* owner = new cv::Mat(std::move(mat));
+  py::capsule free_when_done(owner, [](void* p) { delete static_cast<cv::Mat*>(p); });
+  return py::array(dtype, shape, strides, owner->data, free_when_done);
+}
+
+std::vector<cv::KeyPoint> ToKeypoints(const py::handle& object) {
+  std::vector<cv::KeyPoint> out;
+  if (object.is_none()) return out;
+  if (py::isinstance<py::array>(object)) {
+    const auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(object);
+    if (!a) throw InvalidArgument("keypoints: expected a numeric N x 2 or N x 7 array");
+    if (a.size() == 0) return out;
+    if (a.ndim() != 2 || (a.shape(1) != 2 && a.shape(1) != 7)) {
+      throw InvalidArgument(
+          "keypoints: expected an N x 2 (x, y) or N x 7 (x, y, size, angle, response, octave, "
+          "class_id) array");
+    }
+    const auto r = a.unchecked<2>();
+    out.reserve(static_cast<size_t>(a.shape(0)));
+    for (py::ssize_t i = 0; i < a.shape(0); ++i) {
+      cv::KeyPoint kp;
+      kp.pt = cv::Point2f(static_cast<float>(r(i, 0)), static_cast<float>(r(i, 1)));
+      if (a.shape(1) == 7) {
+        kp.size = static_cast<float>(r(i, 2));
+        kp.angle = static_cast<float>(r(i, 3));
+        kp.response = static_cast<float>(r(i, 4));
+        kp.octave = static_cast<int>(r(i, 5));
+        kp.class_id = static_cast<int>(r(i, 6));
+      } else {
+        kp.size = 0.0f;  // no scale
+      }
+      out.push_back(kp);
+    }
+    return out;
+  }
+  if (!py::isinstance<py::sequence>(object)) {
+    throw InvalidArgument("keypoints: expected a list of cv2.KeyPoint or an N x 7 array");
+  }
+  const auto seq = py::reinterpret_borrow<py::sequence>(object);
+  out.reserve(seq.size());
+  for (const py::handle item : seq) {
+    if (!py::hasattr(item, "pt")) {
+      throw InvalidArgument("keypoints: list item without .pt (expected cv2.KeyPoint)");
+    }
+    const auto pt = item.attr("pt").cast<std::pair<float, float>>();
+    cv::KeyPoint kp;
+    kp.pt = cv::Point2f(pt.first, pt.second);
+    kp.size = item.attr("size").cast<float>();
+    kp.angle = item.attr("angle").cast<float>();
+    kp.response = item.attr("response").cast<float>();
+    kp.octave = item.attr("octave").cast<int>();
+    kp.class_id = item.attr("class_id").cast<int>();
+    out.push_back(kp);
+  }
+  return out;
+}
+
+py::array_t<double> KeypointsToArray(const std::vector<cv::KeyPoint>& keypoints) {
+  py::array_t<double> a({static_cast<py::ssize_t>(keypoints.size()), py::ssize_t{7}});
+  auto w = a.mutable_unchecked<2>();
+  for (size_t i = 0; i < keypoints.size(); ++i) {
+    const cv::KeyPoint& kp = keypoints[i];
+    const auto k = static_cast<py::ssize_t>(i);
+    w(k, 0) = kp.pt.x;
+    w(k, 1) = kp.pt.y;
+    w(k, 2) = kp.size;
+    w(k, 3) = kp.angle;
+    w(k, 4) = kp.response;
+    w(k, 5) = kp.octave;
+    w(k, 6) = kp.class_id;
+  }
+  return a;
+}
+
+}  // namespace imumatch::python

@@ -1,0 +1,35 @@
+#pragma once
+
+// NumPy <-> OpenCV / imumatch conversions shared by the binding files.
+
+#include <vector>
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <opencv2/core.hpp>
+
+#include "imumatch/matching/match_types.h"
+
+namespace imumatch::python {
+
+namespace py = pybind11;
+
+// A cv::Mat header over a NumPy array (no copy when the array is C-contiguous and of a supported
+// dtype: uint8, uint16, int16, int32, float32, float64; 2-D, or 3-D with up to 4 channels). The
+// returned holder keeps a (possibly converted) array alive as long as the Mat is used.
+struct MatView {
+  py::array array;  // owner of the memory the Mat points into
+  cv::Mat mat;
+};
+MatView ArrayToMat(const py::handle& object, const char* what);
+
+// A NumPy array that owns a copy-free reference to the Mat's buffer (the Mat is moved into a
+// capsule). An empty Mat gives an empty array of shape (0,) or (0, cols).
+py::array MatToArray(cv::Mat mat);
+
+// Keypoints: either a list of cv2.KeyPoint-like objects (pt, size, angle, response, octave,
+// class_id) or an N x 2 / N x 7 array with columns x, y, size, angle, response, octave, class_id.
+std::vector<cv::KeyPoint> ToKeypoints(const py::handle& object);
+py::array_t<double> KeypointsToArray(const std::vector<cv::KeyPoint>& keypoints);
+
+}  // namespace imumatch::python
