@@ -1,0 +1,77 @@
+"""Datasets and the evaluation through the bindings: the real EuRoC MH_05 excerpt, the TUM pair
+(equal to the `imumatch eval` command's summary) and an in-memory synthetic sequence."""
+
+import csv
+import os
+import subprocess
+import tempfile
+
+import numpy as np
+import pytest
+
+import imumatch
+from conftest import data_dir
+
+
+def test_euroc_flight_loads_with_its_depth_frames():
+    ds = imumatch.load_dataset(os.path.join(data_dir(), "euroc_mh05_flight"))
+    assert ds.kind == "euroc" and len(ds) == 200
+    assert sum(1 for f in ds.frames if f.depth_path) == 36
+    assert ds.camera.width == 752 and ds.camera.distortion[0] == pytest.approx(-0.2834, abs=1e-3)
+    assert not ds.imu_simulated and len(ds.imu) > 1000
+    assert ds.frames[0].world_from_cam is not None
+    image, depth = ds.read_frame(0)
+    assert image.shape == (480, 752) and image.dtype == np.uint8
+    assert depth.shape == (480, 752) and depth.dtype == np.uint16
+    assert ds.read_frame(100)[1] is None  # no depth image for this frame
+    # The IMU's timestamps are int64 nanoseconds as in data.csv (EuRoC's carry 256 ns steps:
+    # 1403638518097829376, ...102829568), sorted, at 200 Hz.
+    t = ds.imu.t_ns
+    assert t.dtype == np.int64 and t[0] == 1403638518097829376 and t[1] == 1403638518102829568
+    assert (np.diff(t) > 0).all() and abs(np.median(np.diff(t)) - 5_000_000) < 300
+    # The log starts on the ground: the still start gives a bias near the evaluation's.
+    init = imumatch.initialize_from_still(ds.imu, ds.imu.begin_ns, ds.imu.begin_ns + 1_000_000_000,
+                                          ds.imu_params)
+    assert np.allclose(init.bias.gyro, [-1.88e-3, 2.01e-2, 7.80e-2], atol=2e-3)
+
+
+def test_evaluate_equals_the_eval_command_on_the_tum_pair():
+    pair = os.path.join(data_dir(), "tum_fr1_xyz_pair")
+    rows = imumatch.evaluate(pair, detectors=["orb", "sift"], methods=["bf", "guided"])
+    assert [(r["detector"], r["method"]) for r in rows] == [
+        ("sift", "bf"), ("sift", "guided"), ("orb", "bf"), ("orb", "guided")]
+    cli = os.path.join(os.path.dirname(os.environ["IMUMATCH_PYTHON_REFERENCE"]), "..", "apps",
+                       "imumatch")
+    with tempfile.TemporaryDirectory() as out:
+        subprocess.run([cli, "eval", pair, "--detectors", "orb,sift", "--methods", "bf,guided",
+                        "--e2e-frames", "0", "--images", "0", "--out", out],
+                       check=True, capture_output=True, timeout=240)
+        with open(os.path.join(out, "summary.csv")) as f:
+            cli_rows = list(csv.DictReader(f))
+    assert len(cli_rows) == len(rows)
+    for r, c in zip(rows, cli_rows):
+        assert c["detector"] == r["detector"]
+        assert float(c["matches"]) == pytest.approx(r["matches"])
+        assert float(c["correct"]) == pytest.approx(r["correct"])
+        assert float(c["precision"]) == pytest.approx(r["precision"], abs=1e-6)
+    guided = {r["detector"]: r for r in rows if r["method"] == "guided"}
+    assert guided["orb"]["window_recall"] > 0.98
+
+
+def test_evaluate_a_synthetic_sequence_in_memory():
+    seq = imumatch.make_synthetic_sequence("front1m", frame_times_s=[1.0, 1.033, 1.066])
+    out = imumatch.evaluate(seq, detectors=["orb"], methods=["bf", "guided"], details=True)
+    assert out["pairs"] == 2 and out["threshold_px"] == 1.5 and not out["skipped"]
+    bf, guided = out["rows"]
+    assert guided["method"] == "guided" and guided["pairs"] == 2
+    assert guided["precision"] > 0.95 and guided["correct"] >= bf["correct"]
+    assert "front1m" in imumatch.motion_names()
+
+
+def test_tum_trajectory_reader(tmp_path):
+    p = tmp_path / "traj.txt"
+    p.write_text("# t tx ty tz qx qy qz qw\n1.5 1 2 3 0 0 0 1\n2.0 0 0 0 0 0 0.70710678 0.70710678\n")
+    poses = imumatch.read_tum_trajectory(str(p))
+    assert [t for t, _ in poses] == [1_500_000_000, 2_000_000_000]
+    assert np.allclose(poses[0][1].translation, [1, 2, 3])
+    assert imumatch.rotation_distance_deg(poses[1][1], poses[0][1]) == pytest.approx(90.0)

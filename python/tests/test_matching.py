@@ -1,0 +1,134 @@
+"""Features and matching through the bindings equal the C++ pipeline (python_reference.cc) on the
+TUM pair and a synthetic pair; guided matches agree with the exact synthetic ground truth."""
+
+import os
+
+import cv2
+import numpy as np
+import pytest
+
+import imumatch
+from conftest import cpp_reference, data_dir
+
+
+def run_pipeline(camera, motion, gray_a, gray_b, depth_a, detector):
+    kps_a, desc_a = imumatch.extract_features(gray_a, detector, 1000)
+    kps_b, desc_b = imumatch.extract_features(gray_b, detector, 1000)
+    guided = imumatch.match_guided(camera, motion, kps_a, desc_a, kps_b, desc_b, depth_a=depth_a,
+                                   image_a=gray_a, image_b=gray_b)
+    return kps_a, desc_a, kps_b, desc_b, guided
+
+
+def assert_matches_equal(result, expected):
+    got = np.column_stack([result.query_idx, result.train_idx]).astype(int)
+    want = np.array([m[:2] for m in expected], dtype=int).reshape(-1, 2)
+    assert got.shape == want.shape
+    assert (got == want).all()
+    assert np.allclose(result.distance, [m[2] for m in expected], rtol=1e-6)
+
+
+def compare_with_reference(ref, kps_a, desc_a, kps_b, desc_b, guided):
+    assert np.allclose(kps_a, np.array(ref["keypoints_a"]), rtol=1e-6, atol=1e-6)
+    assert np.allclose(kps_b, np.array(ref["keypoints_b"]), rtol=1e-6, atol=1e-6)
+    assert_matches_equal(guided, ref["guided"])
+    refined = np.array([m[3:5] for m in ref["guided"]], dtype=float)
+    assert np.allclose(guided.refined_uv_b, refined, atol=1e-5, equal_nan=True)
+    assert guided.outcomes == ref["outcomes"]
+    assert np.allclose(guided.predictions.uv, np.array(ref["predicted_uv"], dtype=float),
+                       atol=1e-4, equal_nan=True)
+    assert_matches_equal(imumatch.match_opencv_knn_ratio(desc_a, desc_b, 0.8), ref["bf_opencv"])
+    assert_matches_equal(imumatch.match_brute_force(desc_a, desc_b, 0.8), ref["bf_own"])
+
+
+def tum_pair():
+    d = os.path.join(data_dir(), "tum_fr1_xyz_pair")
+    gray_a = cv2.imread(os.path.join(d, "img_prev.png"), cv2.IMREAD_GRAYSCALE)
+    gray_b = cv2.imread(os.path.join(d, "img_curr.png"), cv2.IMREAD_GRAYSCALE)
+    depth_a = cv2.imread(os.path.join(d, "dep_prev.png"), cv2.IMREAD_UNCHANGED)
+    motion = imumatch.camera_motion_from_poses(
+        0, imumatch.read_tum_pose(os.path.join(d, "pose_prev.txt")),
+        1, imumatch.read_tum_pose(os.path.join(d, "pose_curr.txt")))
+    return d, gray_a, gray_b, depth_a, motion
+
+
+def test_tum_pair_equals_cpp():
+    d, gray_a, gray_b, depth_a, motion = tum_pair()
+    ref = cpp_reference("tum", d)
+    out = run_pipeline(imumatch.PinholeCamera.tum_freiburg1(), motion, gray_a, gray_b, depth_a,
+                       "orb")
+    assert len(out[4]) > 300
+    compare_with_reference(ref, *out)
+
+
+def test_cv2_keypoints_give_the_same_matches():
+    _, gray_a, gray_b, depth_a, motion = tum_pair()
+    cam = imumatch.PinholeCamera.tum_freiburg1()
+    kps_a, desc_a = imumatch.extract_features(gray_a, "orb")
+    kps_b, desc_b = imumatch.extract_features(gray_b, "orb")
+    as_cv2 = imumatch.to_cv2_keypoints(kps_a)
+    assert isinstance(as_cv2[0], cv2.KeyPoint)
+    assert np.allclose(imumatch.from_cv2_keypoints(as_cv2), kps_a, atol=1e-4)
+    r1 = imumatch.match_guided(cam, motion, kps_a, desc_a, kps_b, desc_b, depth_a=depth_a)
+    r2 = imumatch.match_guided(cam, motion, as_cv2, desc_a, imumatch.to_cv2_keypoints(kps_b),
+                               desc_b, depth_a=depth_a)
+    assert (r1.query_idx == r2.query_idx).all() and (r1.train_idx == r2.train_idx).all()
+    dm = imumatch.to_cv2_matches(r1)
+    assert dm[0].queryIdx == r1.query_idx[0] and dm[0].trainIdx == r1.train_idx[0]
+    # Outcomes account for every query.
+    assert len(r1.outcomes) == len(kps_a)
+    assert r1.stats["matched"] == len(r1) == r1.outcomes.count("matched")
+
+
+def synthetic_pair():
+    seq = imumatch.make_synthetic_sequence("front1m", frame_times_s=[1.0, 1.1])
+    fa, fb = seq.frames
+    state = imumatch.ImuStateAtFrame(fa.world_from_imu, fa.imu_velocity_in_world,
+                                     seq.imu_initial_bias)
+    motion = imumatch.compute_camera_motion(seq.imu, fa.t_ns, fb.t_ns, state, seq.imu_params,
+                                            seq.cam_from_imu)
+    gray_a = cv2.cvtColor(fa.rgb, cv2.COLOR_BGR2GRAY)
+    gray_b = cv2.cvtColor(fb.rgb, cv2.COLOR_BGR2GRAY)
+    return seq, motion, gray_a, gray_b
+
+
+def test_synthetic_pair_equals_cpp_and_the_exact_ground_truth():
+    seq, motion, gray_a, gray_b = synthetic_pair()
+    ref = cpp_reference("synthetic")
+    r = np.array(ref["motion"])
+    assert np.allclose(motion.cam_b_from_cam_a.quaternion_wxyz, r[:4], atol=1e-12)
+    assert np.allclose(motion.cam_b_from_cam_a.translation, r[4:], atol=1e-12)
+    fa, fb = seq.frames
+    kps_a, desc_a, kps_b, desc_b, guided = run_pipeline(seq.camera, motion, gray_a, gray_b,
+                                                        fa.depth, "sift")
+    compare_with_reference(ref, kps_a, desc_a, kps_b, desc_b, guided)
+    # Independent truth: A's keypoints moved by the exact poses and the rendered depth.
+    gt = imumatch.camera_motion_from_poses(fa.t_ns, fa.world_from_cam, fb.t_ns, fb.world_from_cam)
+    q, t = guided.query_idx, guided.train_idx
+    uv_a = kps_a[q, :2]
+    z = fa.depth[np.round(uv_a[:, 1]).astype(int), np.round(uv_a[:, 0]).astype(int)] / 5000.0
+    ok = z > 0
+    p_b = gt.cam_b_from_cam_a.transform(seq.camera.unproject(uv_a[ok], z[ok]))
+    err = np.linalg.norm(seq.camera.project(p_b) - guided.refined_uv_b[ok], axis=1)
+    assert ok.sum() > 200
+    assert np.mean(err < 1.5) > 0.95
+
+
+def test_feature_kinds_and_zero_copy_descriptors():
+    seq = imumatch.make_synthetic_sequence("left30", frame_times_s=[0.5])
+    gray = cv2.cvtColor(seq.frames[0].rgb, cv2.COLOR_BGR2GRAY)
+    expected = {"sift": (np.float32, 128), "surf": (np.float32, 64), "orb": (np.uint8, 32),
+                "fast": (np.uint8, 32), "akaze": (np.uint8, 61), "brisk": (np.uint8, 64)}
+    for name, (dtype, dims) in expected.items():
+        kps, desc = imumatch.extract_features(gray, name, 500)
+        assert 100 < len(kps) <= 500, name
+        assert desc.dtype == dtype and desc.shape == (len(kps), dims), name
+        assert not desc.flags["OWNDATA"]  # a view of the C++ matrix, not a copy
+    opts = imumatch.FeatureOptions()
+    opts.detector = "orb"
+    opts.max_keypoints = 200
+    kps, _ = imumatch.extract_features(gray, options=opts)
+    assert len(kps) <= 200
+    # Own brute force and OpenCV's agree on most matches of the same descriptors.
+    _, d1 = imumatch.extract_features(gray, "orb", 500)
+    own = imumatch.match_brute_force(d1, d1, ratio=1.0)
+    assert (own.query_idx == own.train_idx).all() and (own.distance == 0).all()
