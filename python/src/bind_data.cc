@@ -135,25 +135,31 @@ py::object Evaluate(EvalSource source, const std::vector<std::string>& detectors
 void BindData(py::module_& m) {
   // ------------------------------------------------------------------------------------ io
   py::class_<FrameRecord>(m, "FrameRecord", "One camera frame of a dataset.")
-      .def_readonly("t_ns", &FrameRecord::t_ns)
-      .def_readonly("image_path", &FrameRecord::image_path)
+      .def_readonly("t_ns", &FrameRecord::t_ns, "Timestamp (ns).")
+      .def_readonly("image_path", &FrameRecord::image_path, "Full path of the image.")
       .def_readonly("depth_path", &FrameRecord::depth_path, "'' when the frame has no depth.")
       .def_readonly("world_from_cam", &FrameRecord::world_from_cam, "Ground truth, or None.")
-      .def_readonly("imu_velocity_in_world", &FrameRecord::imu_velocity_in_world);
+      .def_readonly("imu_velocity_in_world", &FrameRecord::imu_velocity_in_world,
+                    "Velocity of the IMU (m/s, world frame) when known, else None.");
 
   py::class_<Dataset>(m, "Dataset", R"(A sequence: camera, frames, IMU and ground truth.
 
 Timestamps are int64 nanoseconds. Load with imumatch.load_dataset.)")
-      .def_readonly("name", &Dataset::name)
-      .def_readonly("root", &Dataset::root)
-      .def_property_readonly("kind", [](const Dataset& d) { return std::string(ToString(d.kind)); })
-      .def_readonly("camera", &Dataset::camera)
-      .def_readonly("frames", &Dataset::frames)
-      .def_readonly("imu", &Dataset::imu)
-      .def_readonly("imu_simulated", &Dataset::imu_simulated)
-      .def_readonly("imu_source_note", &Dataset::imu_source_note)
-      .def_readonly("imu_params", &Dataset::imu_params)
-      .def_readonly("cam_from_imu", &Dataset::cam_from_imu)
+      .def_readonly("name", &Dataset::name, "Folder name.")
+      .def_readonly("root", &Dataset::root, "Folder holding the data (mav0 for EuRoC).")
+      .def_property_readonly(
+          "kind", [](const Dataset& d) { return std::string(ToString(d.kind)); },
+          "'tum_rgbd', 'euroc' or 'synthetic'.")
+      .def_readonly("camera", &Dataset::camera, "PinholeCamera of the images.")
+      .def_readonly("frames", &Dataset::frames, "List of FrameRecord, time-ordered.")
+      .def_readonly("imu", &Dataset::imu, "ImuBuffer (recorded or simulated).")
+      .def_readonly("imu_simulated", &Dataset::imu_simulated,
+                    "True when the IMU was simulated from the ground truth.")
+      .def_readonly("imu_source_note", &Dataset::imu_source_note,
+                    "Where the IMU data comes from (one line).")
+      .def_readonly("imu_params", &Dataset::imu_params, "ImuParams: noise model of the IMU.")
+      .def_readonly("cam_from_imu", &Dataset::cam_from_imu,
+                    "Rigid3d: p_in_cam = cam_from_imu * p_in_imu.")
       .def_property_readonly(
           "groundtruth",
           [](const Dataset& d) {
@@ -181,7 +187,8 @@ Timestamps are int64 nanoseconds. Load with imumatch.load_dataset.)")
           },
           py::arg("index"), py::arg("with_depth") = true,
           "(gray image uint8, raw depth uint16 or None) of a frame; InputError when unreadable.")
-      .def("__len__", [](const Dataset& d) { return d.frames.size(); });
+      .def(
+          "__len__", [](const Dataset& d) { return d.frames.size(); }, "Number of frames.");
 
   m.def(
       "load_dataset",
@@ -219,21 +226,22 @@ IMU (TUM) get one simulated from a spline through the ground truth (imu_model: '
 
   // ----------------------------------------------------------------------------------- sim
   py::class_<SyntheticFrame>(m, "SyntheticFrame", "A rendered frame with its exact state.")
-      .def_readonly("t_ns", &SyntheticFrame::t_ns)
+      .def_readonly("t_ns", &SyntheticFrame::t_ns, "Timestamp (ns).")
       .def_property_readonly(
           "rgb", [](const SyntheticFrame& f) { return MatToArray(f.rgb); },
           "H x W x 3 uint8, BGR (OpenCV order).")
       .def_property_readonly(
           "depth", [](const SyntheticFrame& f) { return MatToArray(f.depth); },
           "H x W uint16, camera.depth_scale units per metre, 0 = none.")
-      .def_readonly("world_from_cam", &SyntheticFrame::world_from_cam)
-      .def_readonly("world_from_imu", &SyntheticFrame::world_from_imu)
-      .def_readonly("imu_velocity_in_world", &SyntheticFrame::imu_velocity_in_world);
+      .def_readonly("world_from_cam", &SyntheticFrame::world_from_cam, "Exact camera pose.")
+      .def_readonly("world_from_imu", &SyntheticFrame::world_from_imu, "Exact IMU pose.")
+      .def_readonly("imu_velocity_in_world", &SyntheticFrame::imu_velocity_in_world,
+                    "Exact IMU velocity (m/s).");
 
   py::class_<SyntheticSequence>(m, "SyntheticSequence", "Frames, IMU and exact ground truth.")
-      .def_readonly("motion", &SyntheticSequence::motion)
-      .def_readonly("camera", &SyntheticSequence::camera)
-      .def_readonly("frames", &SyntheticSequence::frames)
+      .def_readonly("motion", &SyntheticSequence::motion, "Motion name.")
+      .def_readonly("camera", &SyntheticSequence::camera, "PinholeCamera (no distortion).")
+      .def_readonly("frames", &SyntheticSequence::frames, "List of SyntheticFrame.")
       .def_property_readonly(
           "imu",
           [](const SyntheticSequence& s) {
@@ -242,9 +250,12 @@ IMU (TUM) get one simulated from a spline through the ground truth (imu_model: '
             return b;
           },
           "The simulated IMU as an ImuBuffer (a copy).")
-      .def_readonly("imu_params", &SyntheticSequence::imu_params)
-      .def_readonly("imu_initial_bias", &SyntheticSequence::imu_initial_bias)
-      .def_readonly("cam_from_imu", &SyntheticSequence::cam_from_imu);
+      .def_readonly("imu_params", &SyntheticSequence::imu_params,
+                    "Noise model of the simulated IMU.")
+      .def_readonly("imu_initial_bias", &SyntheticSequence::imu_initial_bias,
+                    "Bias at t = 0 (the random walk starts from it).")
+      .def_readonly("cam_from_imu", &SyntheticSequence::cam_from_imu,
+                    "Rigid3d: p_in_cam = cam_from_imu * p_in_imu.");
 
   m.def("motion_names", &MotionNames, "Names of the synthetic motions (e.g. 'front1m', 'left30').");
   m.def(

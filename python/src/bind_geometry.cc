@@ -141,18 +141,19 @@ K x the undistorted bearing: where the guided matcher predicts and searches.)")
            py::arg("width"), py::arg("height"), py::arg("fx"), py::arg("fy"), py::arg("cx"),
            py::arg("cy"), py::arg("distortion") = std::array<double, 5>{0, 0, 0, 0, 0},
            py::arg("depth_scale") = 5000.0, "Raises ValueError on invalid values.")
-      .def_readwrite("width", &PinholeCamera::width)
-      .def_readwrite("height", &PinholeCamera::height)
-      .def_readwrite("fx", &PinholeCamera::fx)
-      .def_readwrite("fy", &PinholeCamera::fy)
-      .def_readwrite("cx", &PinholeCamera::cx)
-      .def_readwrite("cy", &PinholeCamera::cy)
+      .def_readwrite("width", &PinholeCamera::width, "Image width (px).")
+      .def_readwrite("height", &PinholeCamera::height, "Image height (px).")
+      .def_readwrite("fx", &PinholeCamera::fx, "Focal length x (px).")
+      .def_readwrite("fy", &PinholeCamera::fy, "Focal length y (px).")
+      .def_readwrite("cx", &PinholeCamera::cx, "Principal point x (px, pixel centres at integers).")
+      .def_readwrite("cy", &PinholeCamera::cy, "Principal point y (px).")
       .def_readwrite("distortion", &PinholeCamera::distortion, "(k1, k2, p1, p2, k3)")
       .def_readwrite("depth_scale", &PinholeCamera::depth_scale,
                      "Raw depth units per metre (TUM: 5000).")
       .def("check", &PinholeCamera::Check, "Raises ValueError on invalid values.")
       .def_property_readonly("K", &PinholeCamera::K, "3 x 3 intrinsic matrix.")
-      .def("has_distortion", &PinholeCamera::HasDistortion)
+      .def("has_distortion", &PinholeCamera::HasDistortion,
+           "Whether any distortion coefficient is non-zero.")
       .def_static("euroc_cam0", &PinholeCamera::EurocCam0, "EuRoC MAV cam0 (752 x 480, distorted).")
       .def_static("kinect_default", &PinholeCamera::KinectDefault,
                   "TUM's default Kinect intrinsics (no distortion).")
@@ -213,29 +214,31 @@ K x the undistorted bearing: where the guided matcher predicts and searches.)")
                              });
           },
           py::arg("uv"), "Image pixels -> undistorted normalized coordinates (x/z, y/z).")
-      .def("__repr__", &PinholeCamera::ToString);
+      .def("__repr__", &PinholeCamera::ToString, "Size, intrinsics, distortion, depth scale.");
   m.def("read_camera", &ReadCameraFromText, py::arg("path"),
         "Reads a camera text file (fx fy cx cy [k1 k2 p1 p2 k3] and size); raises InputError.");
 
   // ----------------------------------------------------------------------------------- imu
   py::class_<ImuParams>(m, "ImuParams",
                         R"(IMU noise model (Kalibr's names and units) and gravity.)")
-      .def(py::init<>())
+      .def(py::init<>(), "The defaults.")
       .def_readwrite("gyro_noise_density", &ImuParams::gyro_noise_density, "rad/s/sqrt(Hz)")
       .def_readwrite("gyro_random_walk", &ImuParams::gyro_random_walk, "rad/s^2/sqrt(Hz)")
       .def_readwrite("accel_noise_density", &ImuParams::accel_noise_density, "m/s^2/sqrt(Hz)")
       .def_readwrite("accel_random_walk", &ImuParams::accel_random_walk, "m/s^3/sqrt(Hz)")
-      .def_readwrite("rate_hz", &ImuParams::rate_hz)
-      .def_readwrite("gravity_in_world", &ImuParams::gravity_in_world)
-      .def("check", &ImuParams::Check)
+      .def_readwrite("rate_hz", &ImuParams::rate_hz, "Nominal sample rate (Hz).")
+      .def_readwrite("gravity_in_world", &ImuParams::gravity_in_world,
+                     "Gravity vector in the world frame (m/s^2).")
+      .def("check", &ImuParams::Check,
+           "Raises InvalidArgument (a ValueError) when a value is out of range.")
       .def_static("euroc_adis16448", &ImuParams::EurocAdis16448)
       .def_static("consumer_mems", &ImuParams::ConsumerMems)
       .def_static("ideal", &ImuParams::Ideal)
       .def_static("from_name", &ImuParams::FromName, py::arg("name"),
                   "'euroc', 'mems' or 'ideal'.");
 
-  py::class_<ImuBias>(m, "ImuBias")
-      .def(py::init<>())
+  py::class_<ImuBias>(m, "ImuBias", "Gyro and accelerometer biases, subtracted from the samples.")
+      .def(py::init<>(), "The defaults.")
       .def(py::init([](const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel) {
              ImuBias b;
              b.gyro = gyro;
@@ -256,7 +259,8 @@ Push rejects unsorted or duplicate timestamps, non-finite values and gaps above 
              o.Check();
              return ImuBuffer(o);
            }),
-           py::arg("max_gap_ns") = ImuBufferOptions().max_gap_ns)
+           py::arg("max_gap_ns") = ImuBufferOptions().max_gap_ns,
+           "An empty buffer; pushes with a larger time gap are rejected.")
       .def(
           "push",
           [](ImuBuffer& b, int64_t t_ns, const py::handle& gyro, const py::handle& accel) {
@@ -292,9 +296,11 @@ Push rejects unsorted or duplicate timestamps, non-finite values and gaps above 
           py::arg("t_ns"), py::arg("gyro"), py::arg("accel"),
           py::arg("max_gap_ns") = ImuBufferOptions().max_gap_ns,
           "From arrays; a bad row raises InputError with file 'array' and line = row + 1.")
-      .def("__len__", &ImuBuffer::size)
-      .def_property_readonly("begin_ns", &ImuBuffer::begin_ns)
-      .def_property_readonly("end_ns", &ImuBuffer::end_ns)
+      .def("__len__", &ImuBuffer::size, "Number of samples.")
+      .def_property_readonly("begin_ns", &ImuBuffer::begin_ns,
+                             "Time of the first sample (ns); OutOfRange when empty.")
+      .def_property_readonly("end_ns", &ImuBuffer::end_ns,
+                             "Time of the last sample (ns); OutOfRange when empty.")
       .def_property_readonly(
           "t_ns",
           [](const ImuBuffer& b) {
@@ -329,14 +335,16 @@ Push rejects unsorted or duplicate timestamps, non-finite values and gaps above 
 
   py::class_<ImuPreintegration>(m, "ImuPreintegration",
                                 "Preintegrated IMU between two times (Forster et al.).")
-      .def_readonly("t0_ns", &ImuPreintegration::t0_ns)
-      .def_readonly("t1_ns", &ImuPreintegration::t1_ns)
+      .def_readonly("t0_ns", &ImuPreintegration::t0_ns, "Start time (ns).")
+      .def_readonly("t1_ns", &ImuPreintegration::t1_ns, "End time (ns).")
       .def_property_readonly(
           "delta_rotation",
           [](const ImuPreintegration& p) { return p.delta_rotation.toRotationMatrix(); },
           "imu_i_from_imu_j rotation matrix.")
-      .def_readonly("delta_velocity", &ImuPreintegration::delta_velocity)
-      .def_readonly("delta_position", &ImuPreintegration::delta_position)
+      .def_readonly("delta_velocity", &ImuPreintegration::delta_velocity,
+                    "Velocity increment in the start IMU frame, gravity not removed (m/s).")
+      .def_readonly("delta_position", &ImuPreintegration::delta_position,
+                    "Position increment in the start IMU frame, gravity not removed (m).")
       .def_readonly("covariance", &ImuPreintegration::covariance,
                     "9 x 9 covariance of (rotation, velocity, position).")
       .def_property_readonly("dt", &ImuPreintegration::dt, "seconds");
@@ -353,22 +361,25 @@ Push rejects unsorted or duplicate timestamps, non-finite values and gaps above 
       "Preintegrates the buffer's samples between t0_ns and t1_ns (interpolated at both ends) on "
       "SO(3), bias subtracted.");
 
-  py::class_<NavState>(m, "NavState")
-      .def(py::init<>())
-      .def_readwrite("t_ns", &NavState::t_ns)
-      .def_readwrite("world_from_imu", &NavState::world_from_imu)
-      .def_readwrite("velocity_in_world", &NavState::velocity_in_world);
+  py::class_<NavState>(m, "NavState", "Pose and velocity of the IMU at a time.")
+      .def(py::init<>(), "The defaults.")
+      .def_readwrite("t_ns", &NavState::t_ns, "Time (ns).")
+      .def_readwrite("world_from_imu", &NavState::world_from_imu, "Pose of the IMU.")
+      .def_readwrite("velocity_in_world", &NavState::velocity_in_world, "Velocity (m/s).");
   m.def("propagate", &Propagate, py::arg("state"), py::arg("preintegration"),
         py::arg("gravity_in_world"),
         "The state at t1 from the state at t0 and the preintegration.");
 
-  py::class_<StillInitialization>(m, "StillInitialization")
+  py::class_<StillInitialization>(
+      m, "StillInitialization",
+      "What a still period of the IMU tells: gyro bias, gravity direction.")
       .def_readonly("bias", &StillInitialization::bias, "Gyro bias (accel bias zero).")
-      .def_readonly("gravity_in_imu", &StillInitialization::gravity_in_imu)
+      .def_readonly("gravity_in_imu", &StillInitialization::gravity_in_imu,
+                    "Gravity in the IMU frame (points down).")
       .def_readonly("world_from_imu", &StillInitialization::world_from_imu,
                     "Roll and pitch from gravity, yaw zero.")
       .def_readonly("gyro_bias_sigma", &StillInitialization::gyro_bias_sigma, "rad/s")
-      .def_readonly("num_samples", &StillInitialization::num_samples);
+      .def_readonly("num_samples", &StillInitialization::num_samples, "Samples used.");
   m.def("initialize_from_still", &InitializeFromStill, py::arg("buffer"), py::arg("t0_ns"),
         py::arg("t1_ns"), py::arg("params") = ImuParams(), py::arg("max_gyro_drift") = 0.02,
         py::arg("max_accel_drift") = 0.3,
@@ -380,7 +391,7 @@ Push rejects unsorted or duplicate timestamps, non-finite values and gaps above 
       .value("SO3", IntegrationMode::kSo3, "On SO(3), gravity and bias removed (default).");
 
   py::class_<CameraMotion>(m, "CameraMotion", "Relative motion of the camera between two frames.")
-      .def(py::init<>())
+      .def(py::init<>(), "The defaults.")
       .def(py::init([](const Rigid3d& cam_b_from_cam_a, int64_t t_a_ns, int64_t t_b_ns) {
              CameraMotion c;
              c.cam_b_from_cam_a = cam_b_from_cam_a;
@@ -390,31 +401,38 @@ Push rejects unsorted or duplicate timestamps, non-finite values and gaps above 
            }),
            py::arg("cam_b_from_cam_a"), py::arg("t_a_ns") = 0, py::arg("t_b_ns") = 0,
            "An exact motion (zero covariance).")
-      .def_readwrite("t_a_ns", &CameraMotion::t_a_ns)
-      .def_readwrite("t_b_ns", &CameraMotion::t_b_ns)
-      .def_readwrite("cam_b_from_cam_a", &CameraMotion::cam_b_from_cam_a)
+      .def_readwrite("t_a_ns", &CameraMotion::t_a_ns, "Time of frame A (ns).")
+      .def_readwrite("t_b_ns", &CameraMotion::t_b_ns, "Time of frame B (ns).")
+      .def_readwrite("cam_b_from_cam_a", &CameraMotion::cam_b_from_cam_a,
+                     "Rigid3d mapping points of camera A into camera B.")
       .def_readwrite("covariance", &CameraMotion::covariance,
                      "6 x 6 covariance of (rotation, translation) of cam_b_from_cam_a.");
 
-  py::class_<CameraMotionOptions>(m, "CameraMotionOptions")
-      .def(py::init<>())
-      .def_readwrite("mode", &CameraMotionOptions::mode)
+  py::class_<CameraMotionOptions>(
+      m, "CameraMotionOptions",
+      "How the IMU is integrated and the uncertainties of the state at frame A.")
+      .def(py::init<>(), "The defaults.")
+      .def_readwrite("mode", &CameraMotionOptions::mode,
+                     "IntegrationMode.SO3 (default) or IntegrationMode.PAPER.")
       .def_readwrite("velocity_sigma", &CameraMotionOptions::velocity_sigma, "m/s at frame A")
       .def_readwrite("attitude_sigma", &CameraMotionOptions::attitude_sigma, "rad at frame A")
       .def_readwrite("gyro_bias_sigma", &CameraMotionOptions::gyro_bias_sigma, "rad/s")
       .def_readwrite("accel_bias_sigma", &CameraMotionOptions::accel_bias_sigma, "m/s^2")
-      .def("check", &CameraMotionOptions::Check);
+      .def("check", &CameraMotionOptions::Check,
+           "Raises InvalidArgument (a ValueError) when a value is out of range.");
 
   py::class_<ImuStateAtFrame>(m, "ImuStateAtFrame", "The IMU state at frame A.")
-      .def(py::init<>())
+      .def(py::init<>(), "The defaults.")
       .def(py::init([](const Rigid3d& world_from_imu, const Eigen::Vector3d& velocity_in_world,
                        const ImuBias& bias) {
              return ImuStateAtFrame{world_from_imu, velocity_in_world, bias};
            }),
            py::arg("world_from_imu"), py::arg("velocity_in_world"), py::arg("bias") = ImuBias())
-      .def_readwrite("world_from_imu", &ImuStateAtFrame::world_from_imu)
-      .def_readwrite("velocity_in_world", &ImuStateAtFrame::velocity_in_world)
-      .def_readwrite("bias", &ImuStateAtFrame::bias);
+      .def_readwrite("world_from_imu", &ImuStateAtFrame::world_from_imu,
+                     "Pose of the IMU at frame A.")
+      .def_readwrite("velocity_in_world", &ImuStateAtFrame::velocity_in_world,
+                     "Velocity at frame A (m/s).")
+      .def_readwrite("bias", &ImuStateAtFrame::bias, "ImuBias subtracted from the samples.");
 
   m.def("compute_camera_motion", &ComputeCameraMotion, py::arg("buffer"), py::arg("t_a_ns"),
         py::arg("t_b_ns"), py::arg("state_a"), py::arg("params"), py::arg("cam_from_imu"),

@@ -101,22 +101,30 @@ cv::Mat Descriptors(const py::handle& h, const char* what, MatView& keep) {
 void BindMatching(py::module_& m) {
   // ------------------------------------------------------------------------------ features
   py::class_<FeatureOptions>(m, "FeatureOptions", "Settings of the detector factory.")
-      .def(py::init<>())
+      .def(py::init<>(), "The defaults.")
       .def_property(
           "detector", [](const FeatureOptions& o) { return ToString(o.kind); },
           [](FeatureOptions& o, const std::string& name) { o.kind = ParseDetectorKind(name); },
           "'sift', 'surf', 'orb', 'fast' (FAST+BRIEF), 'akaze' or 'brisk'.")
-      .def_readwrite("max_keypoints", &FeatureOptions::max_keypoints)
-      .def_readwrite("sift_contrast_threshold", &FeatureOptions::sift_contrast_threshold)
-      .def_readwrite("sift_edge_threshold", &FeatureOptions::sift_edge_threshold)
-      .def_readwrite("orb_scale_factor", &FeatureOptions::orb_scale_factor)
-      .def_readwrite("orb_n_levels", &FeatureOptions::orb_n_levels)
-      .def_readwrite("orb_fast_threshold", &FeatureOptions::orb_fast_threshold)
-      .def_readwrite("fast_threshold", &FeatureOptions::fast_threshold)
-      .def_readwrite("akaze_threshold", &FeatureOptions::akaze_threshold)
-      .def_readwrite("brisk_threshold", &FeatureOptions::brisk_threshold)
-      .def_readwrite("brisk_octaves", &FeatureOptions::brisk_octaves)
-      .def("check", &FeatureOptions::Check);
+      .def_readwrite("max_keypoints", &FeatureOptions::max_keypoints,
+                     "Keypoints kept per image (strongest first).")
+      .def_readwrite("sift_contrast_threshold", &FeatureOptions::sift_contrast_threshold,
+                     "SIFT contrast threshold.")
+      .def_readwrite("sift_edge_threshold", &FeatureOptions::sift_edge_threshold,
+                     "SIFT edge threshold.")
+      .def_readwrite("orb_scale_factor", &FeatureOptions::orb_scale_factor,
+                     "ORB pyramid scale factor.")
+      .def_readwrite("orb_n_levels", &FeatureOptions::orb_n_levels, "ORB pyramid levels.")
+      .def_readwrite("orb_fast_threshold", &FeatureOptions::orb_fast_threshold,
+                     "ORB FAST threshold.")
+      .def_readwrite("fast_threshold", &FeatureOptions::fast_threshold,
+                     "FAST threshold (FAST+BRIEF).")
+      .def_readwrite("akaze_threshold", &FeatureOptions::akaze_threshold,
+                     "AKAZE detector response threshold.")
+      .def_readwrite("brisk_threshold", &FeatureOptions::brisk_threshold, "BRISK AGAST threshold.")
+      .def_readwrite("brisk_octaves", &FeatureOptions::brisk_octaves, "BRISK octaves.")
+      .def("check", &FeatureOptions::Check,
+           "Raises InvalidArgument (a ValueError) when a value is out of range.");
   m.def(
       "extract_features",
       [](const py::handle& image, const std::string& detector, int max_keypoints,
@@ -158,29 +166,40 @@ FeatureOptions) overrides detector and max_keypoints.)");
       .value("MIN3X3", DepthSampling::kMin3x3)
       .value("MEDIAN3X3", DepthSampling::kMedian3x3);
   py::class_<PredictionOptions>(m, "PredictionOptions", "How keypoints are predicted into frame B.")
-      .def(py::init<>())
+      .def(py::init<>(), "The defaults.")
       .def_readwrite("min_depth", &PredictionOptions::min_depth, "m; nearer depth is invalid")
       .def_readwrite("max_depth", &PredictionOptions::max_depth, "m")
-      .def_readwrite("predict_without_depth", &PredictionOptions::predict_without_depth)
+      .def_readwrite("predict_without_depth", &PredictionOptions::predict_without_depth,
+                     "Predict along the epipolar segment when a keypoint has no depth.")
       .def_readwrite("segment_min_depth", &PredictionOptions::segment_min_depth,
                      "m: near end of the epipolar segment")
       .def_readwrite("segment_max_depth", &PredictionOptions::segment_max_depth,
                      "m: far end (inf = the point at infinity)")
       .def_readwrite("depth_noise_coeff", &PredictionOptions::depth_noise_coeff,
                      "sigma_z = coeff * z^2 (Kinect)")
-      .def_readwrite("keypoint_sigma_px", &PredictionOptions::keypoint_sigma_px)
-      .def_readwrite("sigma_scaling", &PredictionOptions::sigma_scaling)
-      .def_readwrite("window_mode", &PredictionOptions::window_mode)
-      .def_readwrite("gate_probability", &PredictionOptions::gate_probability)
-      .def_readwrite("min_half_size", &PredictionOptions::min_half_size)
-      .def_readwrite("max_half_size", &PredictionOptions::max_half_size)
-      .def_readwrite("fixed_half_size", &PredictionOptions::fixed_half_size)
-      .def_readwrite("depth_sampling", &PredictionOptions::depth_sampling)
-      .def("check", &PredictionOptions::Check);
+      .def_readwrite("keypoint_sigma_px", &PredictionOptions::keypoint_sigma_px,
+                     "Keypoint localisation noise at the finest scale (px, 1 sigma).")
+      .def_readwrite("sigma_scaling", &PredictionOptions::sigma_scaling,
+                     "How the noise grows with keypoint scale (KeypointSigmaScaling).")
+      .def_readwrite("window_mode", &PredictionOptions::window_mode,
+                     "WindowMode.UNCERTAINTY (default) or WindowMode.FIXED.")
+      .def_readwrite("gate_probability", &PredictionOptions::gate_probability,
+                     "Chi-square gate probability of the window (0.99 -> 9.21 on 2 dof).")
+      .def_readwrite("min_half_size", &PredictionOptions::min_half_size,
+                     "Smallest window half size (px).")
+      .def_readwrite("max_half_size", &PredictionOptions::max_half_size,
+                     "Largest window half size (px).")
+      .def_readwrite("fixed_half_size", &PredictionOptions::fixed_half_size,
+                     "Half size of the fixed window (px; the paper: 10).")
+      .def_readwrite("depth_sampling", &PredictionOptions::depth_sampling,
+                     "How depth is read at a keypoint (DepthSampling).")
+      .def("check", &PredictionOptions::Check,
+           "Raises InvalidArgument (a ValueError) when a value is out of range.");
 
   py::class_<Predictions>(m, "Predictions", R"(Per-keypoint predictions in frame B, in IDEAL pixels
 (undistorted; camera.distort maps them to the image). Arrays, one row per keypoint of A.)")
-      .def("__len__", [](const Predictions& p) { return p.items.size(); })
+      .def(
+          "__len__", [](const Predictions& p) { return p.items.size(); }, "Number of predictions.")
       .def_property_readonly(
           "status",
           [](const Predictions& p) {
@@ -195,16 +214,18 @@ FeatureOptions) overrides detector and max_keypoints.)");
             return Pairs(p.items.size(), [&](size_t i) { return p.items[i].uv; });
           },
           "N x 2 predicted position (the segment's far end without depth).")
-      .def_property_readonly("segment_start",
-                             [](const Predictions& p) {
-                               return Pairs(p.items.size(),
-                                            [&](size_t i) { return p.items[i].segment_start; });
-                             })
-      .def_property_readonly("segment_end",
-                             [](const Predictions& p) {
-                               return Pairs(p.items.size(),
-                                            [&](size_t i) { return p.items[i].segment_end; });
-                             })
+      .def_property_readonly(
+          "segment_start",
+          [](const Predictions& p) {
+            return Pairs(p.items.size(), [&](size_t i) { return p.items[i].segment_start; });
+          },
+          "N x 2 near end of the epipolar segment (= uv with depth).")
+      .def_property_readonly(
+          "segment_end",
+          [](const Predictions& p) {
+            return Pairs(p.items.size(), [&](size_t i) { return p.items[i].segment_end; });
+          },
+          "N x 2 far end of the epipolar segment (= uv with depth).")
       .def_property_readonly(
           "radius",
           [](const Predictions& p) {
@@ -241,12 +262,13 @@ FeatureOptions) overrides detector and max_keypoints.)");
             return a;
           },
           "N x 2 x 2 position covariance (px^2).")
-      .def_property_readonly("angle_change_deg",
-                             [](const Predictions& p) {
-                               return Column<float>(p.items.size(), [&](size_t i) {
-                                 return p.items[i].angle_change_deg;
-                               });
-                             })
+      .def_property_readonly(
+          "angle_change_deg",
+          [](const Predictions& p) {
+            return Column<float>(p.items.size(),
+                                 [&](size_t i) { return p.items[i].angle_change_deg; });
+          },
+          "Predicted change of a keypoint's image angle (degrees).")
       .def(
           "contains",
           [](const Predictions& p, size_t i, float x, float y) {
@@ -288,30 +310,41 @@ metre) or as metres per keypoint (<= 0 or NaN: none). Without depth: the epipola
 
   // ---------------------------------------------------------------------- matching results
   py::class_<SubpixelOptions>(m, "SubpixelOptions", "Sub-pixel refinement of guided matches.")
-      .def(py::init<>())
-      .def_readwrite("half_size", &SubpixelOptions::half_size)
-      .def_readwrite("max_iterations", &SubpixelOptions::max_iterations)
-      .def_readwrite("convergence_px", &SubpixelOptions::convergence_px)
-      .def_readwrite("max_shift_px", &SubpixelOptions::max_shift_px)
-      .def_readwrite("min_texture", &SubpixelOptions::min_texture)
-      .def_readwrite("drop_unaligned", &SubpixelOptions::drop_unaligned)
-      .def("check", &SubpixelOptions::Check);
+      .def(py::init<>(), "The defaults.")
+      .def_readwrite("half_size", &SubpixelOptions::half_size,
+                     "Patch half size (px): 4 -> 9 x 9 samples.")
+      .def_readwrite("max_iterations", &SubpixelOptions::max_iterations,
+                     "Gauss-Newton iterations at most.")
+      .def_readwrite("convergence_px", &SubpixelOptions::convergence_px,
+                     "Stop when a step is below this (px).")
+      .def_readwrite("max_shift_px", &SubpixelOptions::max_shift_px,
+                     "Largest move from the keypoint (px); farther = not aligned.")
+      .def_readwrite("min_texture", &SubpixelOptions::min_texture,
+                     "Smallest gradient texture of the patch.")
+      .def_readwrite("drop_unaligned", &SubpixelOptions::drop_unaligned,
+                     "Drop matches that cannot be aligned.")
+      .def("check", &SubpixelOptions::Check,
+           "Raises InvalidArgument (a ValueError) when a value is out of range.");
 
   py::class_<PyMatchResult>(m, "MatchResult", R"(Matches of frame A's keypoints (query) to frame B's
 (train), as arrays. Guided results also carry the per-query outcome and the predictions.)")
-      .def("__len__", [](const PyMatchResult& r) { return r.result.matches.size(); })
-      .def_property_readonly("query_idx",
-                             [](const PyMatchResult& r) {
-                               return Column<int32_t>(r.result.matches.size(), [&](size_t i) {
-                                 return r.result.matches[i].query_idx;
-                               });
-                             })
-      .def_property_readonly("train_idx",
-                             [](const PyMatchResult& r) {
-                               return Column<int32_t>(r.result.matches.size(), [&](size_t i) {
-                                 return r.result.matches[i].train_idx;
-                               });
-                             })
+      .def(
+          "__len__", [](const PyMatchResult& r) { return r.result.matches.size(); },
+          "Number of matches.")
+      .def_property_readonly(
+          "query_idx",
+          [](const PyMatchResult& r) {
+            return Column<int32_t>(r.result.matches.size(),
+                                   [&](size_t i) { return r.result.matches[i].query_idx; });
+          },
+          "Index of each match's keypoint in frame A (int32).")
+      .def_property_readonly(
+          "train_idx",
+          [](const PyMatchResult& r) {
+            return Column<int32_t>(r.result.matches.size(),
+                                   [&](size_t i) { return r.result.matches[i].train_idx; });
+          },
+          "Index of each match's keypoint in frame B (int32).")
       .def_property_readonly(
           "distance",
           [](const PyMatchResult& r) {
@@ -351,35 +384,52 @@ metre) or as metres per keypoint (<= 0 or NaN: none). Without depth: the epipola
       .def_property_readonly(
           "stats", [](const PyMatchResult& r) { return StatsDict(r.result.stats); },
           "Guided: counts of the outcomes and work done.")
-      .def_property_readonly("predictions",
-                             [](const PyMatchResult& r) -> py::object {
-                               if (!r.guided) return py::none();
-                               return py::cast(r.predictions);
-                             })
-      .def_property_readonly("refine_stats", [](const PyMatchResult& r) {
-        py::dict d;
-        d["refined"] = r.refine_stats.refined;
-        d["failed_border"] = r.refine_stats.failed_border;
-        d["failed_texture"] = r.refine_stats.failed_texture;
-        d["failed_convergence"] = r.refine_stats.failed_convergence;
-        return d;
-      });
+      .def_property_readonly(
+          "predictions",
+          [](const PyMatchResult& r) -> py::object {
+            if (!r.guided) return py::none();
+            return py::cast(r.predictions);
+          },
+          "Guided: the Predictions of A's keypoints (None for the baselines).")
+      .def_property_readonly(
+          "refine_stats",
+          [](const PyMatchResult& r) {
+            py::dict d;
+            d["refined"] = r.refine_stats.refined;
+            d["failed_border"] = r.refine_stats.failed_border;
+            d["failed_texture"] = r.refine_stats.failed_texture;
+            d["failed_convergence"] = r.refine_stats.failed_convergence;
+            return d;
+          },
+          "Guided with images: how many matches were refined, and why the others failed.");
 
   py::class_<GuidedMatcherOptions>(m, "GuidedMatcherOptions", "Checks of the guided matcher.")
-      .def(py::init<>())
-      .def_readwrite("ratio", &GuidedMatcherOptions::ratio)
-      .def_readwrite("max_hamming_fraction", &GuidedMatcherOptions::max_hamming_fraction)
-      .def_readwrite("max_l2_relative", &GuidedMatcherOptions::max_l2_relative)
+      .def(py::init<>(), "The defaults.")
+      .def_readwrite("ratio", &GuidedMatcherOptions::ratio,
+                     "Lowe's ratio inside the search region (1 disables).")
+      .def_readwrite("max_hamming_fraction", &GuidedMatcherOptions::max_hamming_fraction,
+                     "Largest Hamming distance as a fraction of the bits.")
+      .def_readwrite("max_l2_relative", &GuidedMatcherOptions::max_l2_relative,
+                     "Largest L2 distance relative to the descriptors' norm.")
       .def_readwrite("inconsistent_candidates_in_ratio",
-                     &GuidedMatcherOptions::inconsistent_candidates_in_ratio)
-      .def_readwrite("duplicate_radius_px", &GuidedMatcherOptions::duplicate_radius_px)
-      .def_readwrite("mutual", &GuidedMatcherOptions::mutual)
-      .def_readwrite("check_orientation", &GuidedMatcherOptions::check_orientation)
-      .def_readwrite("orientation_tolerance_deg", &GuidedMatcherOptions::orientation_tolerance_deg)
-      .def_readwrite("check_scale", &GuidedMatcherOptions::check_scale)
-      .def_readwrite("scale_tolerance_factor", &GuidedMatcherOptions::scale_tolerance_factor)
-      .def_readwrite("grid_cell_size", &GuidedMatcherOptions::grid_cell_size)
-      .def("check", &GuidedMatcherOptions::Check);
+                     &GuidedMatcherOptions::inconsistent_candidates_in_ratio,
+                     "Candidates failing the orientation/scale checks still count as rivals.")
+      .def_readwrite("duplicate_radius_px", &GuidedMatcherOptions::duplicate_radius_px,
+                     "Candidates this close to the best are twins, not rivals (px).")
+      .def_readwrite("mutual", &GuidedMatcherOptions::mutual, "Keep only mutual best matches.")
+      .def_readwrite("check_orientation", &GuidedMatcherOptions::check_orientation,
+                     "Reject candidates whose angle change disagrees with the predicted rotation.")
+      .def_readwrite("orientation_tolerance_deg", &GuidedMatcherOptions::orientation_tolerance_deg,
+                     "Tolerance of the orientation check (degrees).")
+      .def_readwrite(
+          "check_scale", &GuidedMatcherOptions::check_scale,
+          "Reject candidates whose size ratio disagrees with the predicted scale change.")
+      .def_readwrite("scale_tolerance_factor", &GuidedMatcherOptions::scale_tolerance_factor,
+                     "Tolerance factor of the scale check.")
+      .def_readwrite("grid_cell_size", &GuidedMatcherOptions::grid_cell_size,
+                     "Cell size of the spatial grid over frame B (px).")
+      .def("check", &GuidedMatcherOptions::Check,
+           "Raises InvalidArgument (a ValueError) when a value is out of range.");
 
   m.def(
       "match_guided",

@@ -118,3 +118,33 @@ def test_no_leaks_over_1000_calls():
     assert [sys.getrefcount(x) for x in (kps, desc, depth, image, cam, motion)] == refs
     assert len(gc.get_objects()) - objects < 50
     assert rss_kib() - rss < 20 * 1024  # KiB: a leak of one 300 x 32 array per call is 9 MB
+
+
+def test_every_public_name_has_a_docstring():
+    import inspect
+
+    def described(doc, name):
+        # pybind11 puts the signature first; a docstring needs more than that.
+        lines = [ln.strip() for ln in (doc or "").splitlines() if ln.strip()]
+        return any(not (ln.startswith(name + "(") or ln.startswith("(self") or
+                        ln.startswith("Overloaded") or ln[:2].rstrip(".").isdigit())
+                   for ln in lines)
+
+    missing = []
+    for name in dir(imumatch):
+        if name.startswith("_"):
+            continue
+        obj = getattr(imumatch, name)
+        if inspect.isclass(obj):
+            if not (obj.__doc__ or "").strip():
+                missing.append(name)
+            if issubclass(obj, BaseException) or hasattr(obj, "__members__"):
+                continue  # exceptions and enums: the class docstring is enough
+            for attr, value in vars(obj).items():
+                if attr.startswith("__") and attr not in ("__init__", "__len__"):
+                    continue
+                if not described(getattr(value, "__doc__", ""), attr):
+                    missing.append(name + "." + attr)
+        elif callable(obj) and not described(obj.__doc__, name):
+            missing.append(name)
+    assert missing == []
