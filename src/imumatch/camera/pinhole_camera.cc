@@ -13,7 +13,8 @@
 namespace imumatch {
 
 void PinholeCamera::Check() const {
-  IMUMATCH_CHECK(width > 0 && height > 0, "image size " << width << "x" << height);
+  IMUMATCH_CHECK(width > 0 && height > 0 && width <= kMaxSide && height <= kMaxSide,
+                 "image size " << width << "x" << height << " (1.." << kMaxSide << " a side)");
   IMUMATCH_CHECK(std::isfinite(fx) && fx > 0 && std::isfinite(fy) && fy > 0,
                  "focal lengths fx=" << fx << " fy=" << fy);
   IMUMATCH_CHECK(std::isfinite(cx) && std::isfinite(cy), "principal point");
@@ -178,7 +179,8 @@ std::string PinholeCamera::ToString() const {
 }
 
 PinholeCamera ParseCameraFromText(const std::string& text, const std::string& source_name) {
-  std::istringstream in(text);
+  // A UTF-8 byte-order mark (written by some Windows editors) is skipped.
+  std::istringstream in(text.compare(0, 3, "\xEF\xBB\xBF") == 0 ? text.substr(3) : text);
   std::string line;
   int line_no = 0;
   while (std::getline(in, line)) {
@@ -207,8 +209,11 @@ PinholeCamera ParseCameraFromText(const std::string& text, const std::string& so
     c.cx = v[2];
     c.cy = v[3];
     if (v.size() >= 6) {
-      if (v[4] != std::floor(v[4]) || v[5] != std::floor(v[5])) {
-        throw InputError(source_name, line_no, "width and height must be whole numbers");
+      if (v[4] != std::floor(v[4]) || v[5] != std::floor(v[5]) || !(v[4] >= 1 && v[5] >= 1) ||
+          v[4] > PinholeCamera::kMaxSide || v[5] > PinholeCamera::kMaxSide) {
+        throw InputError(source_name, line_no,
+                         "width and height must be whole numbers in [1, " +
+                             std::to_string(PinholeCamera::kMaxSide) + "]");
       }
       c.width = static_cast<int>(v[4]);
       c.height = static_cast<int>(v[5]);

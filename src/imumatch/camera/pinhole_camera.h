@@ -27,6 +27,9 @@ struct PinholeCamera {
   // Raw depth units per metre: TUM and Kinect PNGs store 5000 per metre (value / 5000 = metres).
   double depth_scale = 5000.0;
 
+  // The largest image side a camera may have (pixels): bounds every per-pixel buffer.
+  static constexpr int kMaxSide = 32768;
+
   // Throws InvalidArgument for a non-positive size, focal length or depth scale, or non-finite
   // values.
   void Check() const;

@@ -100,8 +100,9 @@ bool IsBinaryDescriptor(DetectorKind kind) {
 
 void FeatureOptions::Check() const {
   (void)ToString(kind);  // throws for a value outside the enum
-  IMUMATCH_CHECK(max_keypoints >= 1,
-                 "FeatureOptions.max_keypoints must be >= 1, got " << max_keypoints);
+  IMUMATCH_CHECK(max_keypoints >= 1 && max_keypoints <= kMaxKeypoints,
+                 "FeatureOptions.max_keypoints must be in [1, " << kMaxKeypoints << "], got "
+                                                                << max_keypoints);
   IMUMATCH_CHECK(
       std::isfinite(sift_contrast_threshold) && sift_contrast_threshold > 0,
       "FeatureOptions.sift_contrast_threshold must be > 0, got " << sift_contrast_threshold);

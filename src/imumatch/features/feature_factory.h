@@ -26,6 +26,9 @@ struct FeatureOptions {
   DetectorKind kind = DetectorKind::kOrb;
   // Upper bound on the number of keypoints, strongest (largest response) first. >= 1.
   int max_keypoints = 1000;
+  // Bound on max_keypoints: 100000 SIFT descriptors are 51 MB, and no frame of a front end needs
+  // more (a 4K image at one keypoint per 8 x 8 pixels has 130000 cells).
+  static constexpr int kMaxKeypoints = 100000;
 
   // SIFT (cv::SIFT): contrast threshold (OpenCV default 0.04) and edge threshold (10).
   double sift_contrast_threshold = 0.04;

@@ -70,6 +70,10 @@ TEST(FeatureOptionsTest, CheckRejectsBadValues) {
   FeatureOptions bad = ok;
   bad.max_keypoints = 0;
   EXPECT_THROW(bad.Check(), InvalidArgument);
+  bad.max_keypoints = 2147483647;  // would allocate without bound
+  EXPECT_THROW(bad.Check(), InvalidArgument);
+  bad.max_keypoints = FeatureOptions::kMaxKeypoints;
+  EXPECT_NO_THROW(bad.Check());
   bad = ok;
   bad.orb_scale_factor = 1.0;
   EXPECT_THROW(bad.Check(), InvalidArgument);

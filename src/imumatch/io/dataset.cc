@@ -13,6 +13,7 @@
 #include "imumatch/core/time.h"
 #include "imumatch/io/euroc.h"
 #include "imumatch/io/imu_io.h"
+#include "imumatch/io/plausibility.h"
 #include "imumatch/io/text_parsing.h"
 #include "imumatch/io/trajectory_io.h"
 #include "imumatch/sim/imu_simulator.h"
@@ -62,6 +63,9 @@ std::string DescribeModel(const std::string& model) {
   return "the '" + model + "' noise model";
 }
 
+// A simulated IMU covers the ground truth's span at 200 Hz: 6 hours are 4.3 M samples (240 MB).
+constexpr int64_t kMaxSimulatedImuSpanNs = 6 * 3'600'000'000'000;
+
 // ----- JSON helpers for sequence.json ------------------------------------------------------------
 
 const Json& Need(const Json& obj, const std::string& key, const std::string& path) {
@@ -109,7 +113,19 @@ Json ParseJsonFile(const std::string& path) {
     const int line = 1 + static_cast<int>(std::count(
                              text.begin(), text.begin() + static_cast<std::ptrdiff_t>(byte), '\n'));
     throw InputError(path, line, std::string("JSON syntax error: ") + e.what());
+  } catch (const Json::exception& e) {  // e.g. out_of_range: a number like 1e400
+    throw InputError(path, std::string("JSON: ") + e.what());
   }
+}
+
+int NeedInt(const Json& obj, const std::string& key, const std::string& path, int min_value,
+            int max_value) {
+  const double d = NeedDouble(obj, key, path);
+  if (!(d >= min_value && d <= max_value) || d != std::floor(d)) {
+    throw InputError(path, "'" + key + "' must be an integer in [" + std::to_string(min_value) +
+                               ", " + std::to_string(max_value) + "]");
+  }
+  return static_cast<int>(d);
 }
 
 // "t vx vy vz" lines.
@@ -124,6 +140,7 @@ std::map<int64_t, Eigen::Vector3d> ReadVelocities(const std::string& path) {
     out[t] = Eigen::Vector3d(ParseFiniteDouble(line.fields[1], path, line.line, "vx"),
                              ParseFiniteDouble(line.fields[2], path, line.line, "vy"),
                              ParseFiniteDouble(line.fields[3], path, line.line, "vz"));
+    plausibility::CheckVelocity(out[t], path, line.line);
     previous = t;
     previous_line = line.line;
   }
@@ -247,6 +264,14 @@ Dataset LoadTumRgbdDataset(const std::string& root, const DatasetOptions& option
         "to simulate one from)";
   } else {
     // The spline describes the camera (body = camera); the IMU sits at cam_from_imu in it.
+    // Bounded work: the IMU is simulated over the whole ground-truth span.
+    const int64_t span_ns = files.groundtruth.back().t_ns - files.groundtruth.front().t_ns;
+    if (span_ns > kMaxSimulatedImuSpanNs) {
+      throw InputError(gt_path, "ground truth spans " + FormatNsAsSeconds(span_ns) +
+                                    " s: longer than the " +
+                                    FormatNsAsSeconds(kMaxSimulatedImuSpanNs) +
+                                    " s an IMU is simulated for (a timestamp jump?)");
+    }
     const SplineTrajectory spline(files.groundtruth, options.spline);
     ImuSimulatorOptions sim;
     sim.rate_hz = d.imu_params.rate_hz;
@@ -361,8 +386,8 @@ Dataset LoadSyntheticDataset(const std::string& root, const DatasetOptions& opti
 
   const Json& cam = Need(j, "camera", json_path);
   PinholeCamera c;
-  c.width = static_cast<int>(NeedDouble(cam, "width", json_path));
-  c.height = static_cast<int>(NeedDouble(cam, "height", json_path));
+  c.width = NeedInt(cam, "width", json_path, 1, plausibility::kMaxImageSide);
+  c.height = NeedInt(cam, "height", json_path, 1, plausibility::kMaxImageSide);
   c.fx = NeedDouble(cam, "fx", json_path);
   c.fy = NeedDouble(cam, "fy", json_path);
   c.cx = NeedDouble(cam, "cx", json_path);

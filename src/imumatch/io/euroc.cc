@@ -9,6 +9,7 @@
 
 #include "imumatch/core/error.h"
 #include "imumatch/io/imu_io.h"
+#include "imumatch/io/plausibility.h"
 #include "imumatch/io/text_parsing.h"
 
 namespace imumatch {
@@ -151,9 +152,11 @@ EurocCameraSensor ReadEurocCameraSensor(const std::string& path) {
   sensor.camera.cy = k[3];
   const std::vector<double> size = GetDoubles(root, "resolution", path, 2, 2);
   if (size[0] != std::floor(size[0]) || size[1] != std::floor(size[1]) || size[0] < 1 ||
-      size[1] < 1 || size[0] > 1e5 || size[1] > 1e5) {
+      size[1] < 1 || size[0] > plausibility::kMaxImageSide ||
+      size[1] > plausibility::kMaxImageSide) {
     throw InputError(path, LineOf(root["resolution"]),
-                     "resolution must be two positive whole numbers [width, height]");
+                     "resolution must be two whole numbers [width, height] in [1, " +
+                         std::to_string(plausibility::kMaxImageSide) + "]");
   }
   sensor.camera.width = static_cast<int>(size[0]);
   sensor.camera.height = static_cast<int>(size[1]);
@@ -233,6 +236,8 @@ std::vector<EurocGroundTruthState> ReadEurocGroundTruth(const std::string& path)
     s.world_from_body.translation = Eigen::Vector3d(v[0], v[1], v[2]);
     s.world_from_body.rotation = CheckedUnitQuaternion(v[3], v[4], v[5], v[6], path, line.line);
     s.velocity_in_world = Eigen::Vector3d(v[7], v[8], v[9]);
+    plausibility::CheckPosition(s.world_from_body.translation, path, line.line);
+    plausibility::CheckVelocity(s.velocity_in_world, path, line.line);
     s.gyro_bias = Eigen::Vector3d(v[10], v[11], v[12]);
     s.accel_bias = Eigen::Vector3d(v[13], v[14], v[15]);
     states.push_back(s);

@@ -1,14 +1,19 @@
 #include "imumatch/io/image_io.h"
 
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <limits>
+#include <optional>
 #include <sstream>
+#include <utility>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "imumatch/core/error.h"
+#include "imumatch/io/plausibility.h"
 
 namespace imumatch {
 namespace {
@@ -36,6 +41,36 @@ std::string DepthText(int depth) {
   }
 }
 
+// The size a PNG or JPEG file claims in its header (nothing for other formats, or when the header
+// is not found in the first 64 KiB): checked before decoding, so that a few bytes cannot make the
+// decoder allocate gigabytes.
+std::optional<std::pair<int64_t, int64_t>> HeaderSize(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string head(65536, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<size_t>(in.gcount()));
+  auto byte = [&](size_t i) { return static_cast<uint32_t>(static_cast<unsigned char>(head[i])); };
+  auto be32 = [&](size_t i) {
+    return byte(i) << 24 | byte(i + 1) << 16 | byte(i + 2) << 8 | byte(i + 3);
+  };
+  auto be16 = [&](size_t i) { return byte(i) << 8 | byte(i + 1); };
+  if (head.size() >= 24 && head.compare(0, 8, "\x89PNG\r\n\x1a\n") == 0 &&
+      head.compare(12, 4, "IHDR") == 0) {
+    return std::make_pair(int64_t{be32(16)}, int64_t{be32(20)});
+  }
+  if (head.size() >= 4 && byte(0) == 0xFF && byte(1) == 0xD8) {  // JPEG: walk the markers
+    size_t i = 2;
+    while (i + 9 < head.size() && byte(i) == 0xFF) {
+      const uint32_t marker = byte(i + 1);
+      const bool sof =
+          marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
+      if (sof) return std::make_pair(int64_t{be16(i + 7)}, int64_t{be16(i + 5)});
+      i += 2 + be16(i + 2);
+    }
+  }
+  return std::nullopt;
+}
+
 // imread with the checks every loader shares.
 cv::Mat ReadChecked(const std::string& path, int flags) {
   namespace fs = std::filesystem;
@@ -44,6 +79,9 @@ cv::Mat ReadChecked(const std::string& path, int flags) {
   if (fs::is_directory(path, ec)) throw InputError(path, "is a folder, not an image file");
   const auto bytes = fs::file_size(path, ec);
   if (!ec && bytes == 0) throw InputError(path, "image file is empty (0 bytes)");
+  if (const auto size = HeaderSize(path)) {
+    plausibility::CheckImageSize(size->first, size->second, path);
+  }
   cv::Mat image;
   try {
     image = cv::imread(path, flags);
@@ -53,6 +91,7 @@ cv::Mat ReadChecked(const std::string& path, int flags) {
   if (image.empty()) {
     throw InputError(path, "cannot decode image (unreadable, truncated or not an image format)");
   }
+  plausibility::CheckImageSize(image.cols, image.rows, path);
   return image;
 }
 

@@ -4,6 +4,7 @@
 
 #include "imumatch/core/error.h"
 #include "imumatch/core/time.h"
+#include "imumatch/io/plausibility.h"
 #include "imumatch/io/text_parsing.h"
 
 namespace imumatch {
@@ -12,6 +13,7 @@ ImuBuffer ReadImuTable(const std::string& path, FieldSeparator separator, ImuTim
                        const std::string& layout, const char* const (&names)[6],
                        const ImuBufferOptions& options) {
   ImuBuffer buffer(options);
+  int previous_line = 0;
   for (const TextLine& line : ReadTextFields(path, separator)) {
     CheckFieldCount(line, 7, path, layout);
     ImuSample s;
@@ -22,7 +24,13 @@ ImuBuffer ReadImuTable(const std::string& path, FieldSeparator separator, ImuTim
       v[i] = ParseFiniteDouble(line.fields[i + 1], path, line.line, names[i]);
     s.gyro_rad_s = Eigen::Vector3d(v[0], v[1], v[2]);
     s.accel_m_s2 = Eigen::Vector3d(v[3], v[4], v[5]);
+    plausibility::CheckImu(s.gyro_rad_s, s.accel_m_s2, path, line.line);
+    if (!buffer.empty()) {
+      plausibility::CheckTimestampStep(buffer.samples().back().t_ns, previous_line, s.t_ns, path,
+                                       line.line);
+    }
     buffer.Push(s, path, line.line);
+    previous_line = line.line;
   }
   if (buffer.empty()) throw InputError(path, "no IMU samples found");
   return buffer;

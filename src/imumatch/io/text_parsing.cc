@@ -9,6 +9,7 @@
 
 #include "imumatch/core/error.h"
 #include "imumatch/core/time.h"
+#include "imumatch/io/plausibility.h"
 
 namespace imumatch {
 namespace {
@@ -41,7 +42,8 @@ std::string ReadFileToString(const std::string& path) {
 std::vector<TextLine> SplitTextFields(const std::string& text, const std::string& source_name,
                                       FieldSeparator separator) {
   std::vector<TextLine> lines;
-  size_t pos = 0;
+  // A UTF-8 byte-order mark (written by some Windows editors) is not part of the first field.
+  size_t pos = text.compare(0, 3, "\xEF\xBB\xBF") == 0 ? 3 : 0;
   int line_no = 0;
   while (pos < text.size()) {
     size_t end = text.find('\n', pos);
@@ -105,21 +107,27 @@ double ParseFiniteDouble(const std::string& token, const std::string& file, int 
 }
 
 int64_t ParseSecondsField(const std::string& token, const std::string& file, int line) {
+  int64_t t_ns = 0;
   try {
-    return ParseSecondsToNs(token);
+    t_ns = ParseSecondsToNs(token);
   } catch (const InvalidArgument&) {
     throw InputError(file, line,
                      "timestamp '" + Shorten(token) + "' is not a finite number of seconds");
   }
+  plausibility::CheckTimestamp(t_ns, file, line);
+  return t_ns;
 }
 
 int64_t ParseNsField(const std::string& token, const std::string& file, int line) {
+  int64_t t_ns = 0;
   try {
-    return ParseNs(token);
+    t_ns = ParseNs(token);
   } catch (const InvalidArgument&) {
     throw InputError(file, line,
                      "timestamp '" + Shorten(token) + "' is not an integer number of nanoseconds");
   }
+  plausibility::CheckTimestamp(t_ns, file, line);
+  return t_ns;
 }
 
 void CheckIncreasingTimestamp(int64_t previous_t_ns, int previous_line, int64_t t_ns,
@@ -136,6 +144,7 @@ void CheckIncreasingTimestamp(int64_t previous_t_ns, int previous_line, int64_t 
                          FormatNsAsSeconds(previous_t_ns) + " s on line " +
                          std::to_string(previous_line) + "): timestamps must increase");
   }
+  plausibility::CheckTimestampStep(previous_t_ns, previous_line, t_ns, file, line);
 }
 
 Eigen::Quaterniond CheckedUnitQuaternion(double w, double x, double y, double z,

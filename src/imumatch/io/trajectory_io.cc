@@ -4,6 +4,7 @@
 
 #include "imumatch/core/error.h"
 #include "imumatch/core/time.h"
+#include "imumatch/io/plausibility.h"
 #include "imumatch/io/text_parsing.h"
 
 namespace imumatch {
@@ -20,6 +21,7 @@ Rigid3d ParsePoseFields(const TextLine& line, size_t first, const std::string& p
   Rigid3d pose;
   pose.rotation = q;
   pose.translation = Eigen::Vector3d(v[0], v[1], v[2]);
+  plausibility::CheckPosition(pose.translation, path, line.line);
   return pose;
 }
 

@@ -5,6 +5,7 @@
 #include <tuple>
 
 #include "imumatch/core/error.h"
+#include "imumatch/io/plausibility.h"
 #include "imumatch/io/text_parsing.h"
 #include "imumatch/io/trajectory_io.h"
 
@@ -43,6 +44,7 @@ std::vector<StampedAccel> ReadTumAccelerometer(const std::string& path) {
     s.accel_m_s2 = Eigen::Vector3d(ParseFiniteDouble(line.fields[1], path, line.line, "ax"),
                                    ParseFiniteDouble(line.fields[2], path, line.line, "ay"),
                                    ParseFiniteDouble(line.fields[3], path, line.line, "az"));
+    plausibility::CheckAccel(s.accel_m_s2, path, line.line);
     samples.push_back(s);
     previous_line = line.line;
   }

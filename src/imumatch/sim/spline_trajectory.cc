@@ -56,6 +56,11 @@ SplineTrajectory::SplineTrajectory(const std::vector<StampedPose>& poses,
   }
   t0_ns_ = poses.front().t_ns;
   duration_s_ = TimeOf(poses.back().t_ns);
+  // Bounded work: the fit allocates per knot.
+  IMUMATCH_CHECK(duration_s_ / options.knot_spacing_s <= kMaxSegments,
+                 "SplineTrajectory: " << duration_s_ << " s at knots every "
+                                      << options.knot_spacing_s << " s needs more than "
+                                      << kMaxSegments << " knots");
   num_segments_ =
       std::max(1, static_cast<int>(std::ceil(duration_s_ / options.knot_spacing_s - 1e-9)));
   knot_spacing_ = duration_s_ / num_segments_;

@@ -30,6 +30,8 @@ struct SplineFitOptions {
 // first pose: t = (t_ns - t0_ns()) * 1e-9; queries outside [0, EndTime()] are clamped.
 class SplineTrajectory : public Trajectory {
  public:
+  // At most this many knot intervals (2e6: 27.8 hours at 0.05 s), checked before allocating.
+  static constexpr int kMaxSegments = 2'000'000;
   // Throws InvalidArgument for fewer than 4 poses, timestamps not strictly increasing (names the
   // index), non-finite poses, or bad options.
   explicit SplineTrajectory(const std::vector<StampedPose>& poses,

@@ -147,6 +147,15 @@ TEST(SplineTrajectoryTest, RejectsBadInput) {
   std::vector<StampedPose> nan = poses;
   nan[5].world_from_body.translation.x() = std::nan("");
   EXPECT_THROW(SplineTrajectory{nan}, InvalidArgument);
+  // Bounded work: a last pose 1e6 s later would need 2e7 knots; refused before allocating.
+  std::vector<StampedPose> far = poses;
+  far.back().t_ns += 1'000'000'000'000'000;
+  try {
+    SplineTrajectory spline(far);
+    FAIL() << "expected InvalidArgument";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("knots"), std::string::npos) << e.what();
+  }
   SplineFitOptions bad;
   bad.knot_spacing_s = 0.0;
   EXPECT_THROW(SplineTrajectory(poses, bad), InvalidArgument);

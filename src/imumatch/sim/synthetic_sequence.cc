@@ -51,6 +51,19 @@ SyntheticSequence MakeSyntheticSequence(const Trajectory& trajectory,
   options.Check();
   const double t_start = trajectory.StartTime(), t_end = trajectory.EndTime();
   IMUMATCH_CHECK(t_end > t_start, "MakeSyntheticSequence: the trajectory has an empty time span");
+  // Bounded work, checked before anything is simulated or rendered.
+  const double frames_needed = options.frame_times_s.empty()
+                                   ? std::floor((t_end - t_start) * options.frame_rate_hz) + 1.0
+                                   : static_cast<double>(options.frame_times_s.size());
+  IMUMATCH_CHECK(frames_needed <= SyntheticSequenceOptions::kMaxFrames,
+                 "MakeSyntheticSequence: "
+                     << frames_needed << " frames (" << (t_end - t_start) << " s at "
+                     << options.frame_rate_hz << " Hz) is more than the "
+                     << SyntheticSequenceOptions::kMaxFrames << " a synthetic sequence may have");
+  IMUMATCH_CHECK(t_end - t_start <= SyntheticSequenceOptions::kMaxDurationS,
+                 "MakeSyntheticSequence: " << (t_end - t_start) << " s is longer than the "
+                                           << SyntheticSequenceOptions::kMaxDurationS
+                                           << " s a synthetic sequence may last");
   std::vector<double> times = options.frame_times_s;
   if (times.empty()) {
     for (int k = 0;; ++k) {

@@ -19,6 +19,11 @@
 namespace imumatch {
 
 struct SyntheticSequenceOptions {
+  // Bounds on the work a sequence may ask for (checked before simulating or rendering): frames
+  // (about 0.1 s and 1 MB of PNG each at 640 x 480) and the trajectory's span (the IMU is
+  // simulated over all of it).
+  static constexpr int kMaxFrames = 20000;
+  static constexpr double kMaxDurationS = 3600.0;
   std::string motion = "front1m";  // a MotionNames() entry
   MotionOptions motion_options;
   // Frames at t = k / frame_rate_hz over the whole trajectory, unless frame_times_s is given:

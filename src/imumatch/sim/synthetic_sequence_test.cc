@@ -170,6 +170,19 @@ TEST(SyntheticSequenceTest, RejectsBadOptions) {
   options = SyntheticSequenceOptions();
   options.frame_rate_hz = 0.0;
   EXPECT_THROW(options.Check(), InvalidArgument);
+  // Bounded work, refused before simulating or rendering: 1e6 s at 1 fps, or 30000 frames.
+  options = SyntheticSequenceOptions();
+  options.camera = SmallCamera(32);
+  options.motion_options.duration_s = 1e6;
+  options.frame_rate_hz = 1.0;
+  try {
+    MakeSyntheticSequence(options, CoarseScene());
+    ADD_FAILURE() << "expected InvalidArgument";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("20000"), std::string::npos) << e.what();
+  }
+  options.motion_options.duration_s = 4000.0;  // 4001 frames, but longer than an hour
+  EXPECT_THROW(MakeSyntheticSequence(options, CoarseScene()), InvalidArgument);
 }
 
 }  // namespace
