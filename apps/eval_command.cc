@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <functional>
 #include <iomanip>
@@ -25,6 +26,7 @@
 #include "imumatch/eval/summary.h"
 #include "imumatch/imu/imu_integrator.h"
 #include "imumatch/io/dataset.h"
+#include "imumatch/io/output_files.h"
 
 namespace imumatch::apps {
 namespace {
@@ -54,15 +56,19 @@ struct CommonArgs {
   double orientation_tolerance = -1.0;  // < 0: GuidedMatcherOptions default
   double still_s = 1.0;
   std::string sigma_scaling = "size";
+  bool overwrite = false;
 };
 
 void AddCommonOptions(CLI::App* cmd, CommonArgs& a) {
+  cmd->add_flag("--overwrite", a.overwrite,
+                "write into an --out folder that holds files imumatch did not write");
   cmd->add_option("--detectors", a.detectors, "comma-separated: sift,surf,orb,fast,akaze,brisk")
       ->capture_default_str();
   cmd->add_option("--methods", a.methods, "comma-separated: bf,guided,fixed10,bf_own")
       ->capture_default_str();
   cmd->add_option("--max-keypoints", a.max_keypoints, "keypoints per frame and detector")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::Range(1, FeatureOptions::kMaxKeypoints));
   cmd->add_option(
       "--threshold", a.threshold,
       "correct-match threshold in px (default: 1.5 on synthetic data, automatic "
@@ -76,9 +82,11 @@ void AddCommonOptions(CLI::App* cmd, CommonArgs& a) {
   cmd->add_option("--seed", a.seed, "seed of the simulated IMU and the state perturbation")
       ->capture_default_str();
   cmd->add_option("--images", a.images, "match images for the first N pairs of each case")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--e2e-frames", a.e2e_frames, "frames of the end-to-end ORB timing (0 = skip)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--progress", a.progress, "progress bar on stderr (default: when it is a TTY)");
   cmd->add_option("--ratio", a.ratio, "Lowe's ratio for brute force and guided matching")
       ->capture_default_str();
@@ -127,7 +135,8 @@ EvaluationOptions MakeOptions(const CommonArgs& a) {
   o.seed = a.seed;
   IMUMATCH_CHECK(a.images >= 0, "--images must be >= 0");
   o.keep_visuals = a.images;
-  IMUMATCH_CHECK(a.threshold >= 0.0, "--threshold must be > 0");
+  IMUMATCH_CHECK(std::isfinite(a.threshold) && a.threshold >= 0.0,
+                 "--threshold must be a finite number of pixels > 0, got " << a.threshold);
   IMUMATCH_CHECK(a.e2e_frames == 0 || a.e2e_frames >= 2, "--e2e-frames must be 0 or >= 2");
   o.ratio = a.ratio;
   o.guided.ratio = a.guided_ratio > 0.0 ? a.guided_ratio : a.ratio;
@@ -189,13 +198,21 @@ void Finish(const EvaluationResult& result, ReportContext& context, const Common
                                                {"seed", std::to_string(a.seed)}});
   std::cout << MarkdownReport(result, context) << std::flush;
   const auto files = WriteEvaluationOutputs(a.out, result, context);
+  RecordOutputs(a.out, files);
   std::cout << "\nWrote " << files.size() << " files to " << a.out
             << " (report.md, report.json, summary.csv, pairs.csv, skipped.csv, time_*.png, "
                "precision_*.png, match_*.png)\n";
 }
 
+// Checked before the work starts: writable, and not a folder of somebody else's files.
+void PrepareOut(const CommonArgs& a) {
+  const OutputFolderCheck check = PrepareOutputFolder(a.out, a.overwrite);
+  if (!check.note.empty()) std::cerr << "imumatch: note: " << check.note << "\n";
+}
+
 void RunEval(const std::string& path, CommonArgs a, double interval_s, int step, size_t max_pairs) {
   EvaluationOptions o = MakeOptions(a);
+  PrepareOut(a);
   const std::optional<double> threshold =
       a.threshold > 0.0 ? std::optional<double>(a.threshold) : std::nullopt;
   EvalSource source;
@@ -260,6 +277,7 @@ void RunEval(const std::string& path, CommonArgs a, double interval_s, int step,
 void RunDemo(CommonArgs a, int intermediate) {
   const auto t0 = std::chrono::steady_clock::now();
   EvaluationOptions o = MakeOptions(a);
+  PrepareOut(a);
   const std::optional<double> threshold =
       a.threshold > 0.0 ? std::optional<double>(a.threshold) : std::nullopt;
   SeedCaseOptions so;
@@ -323,12 +341,15 @@ void AddEvalCommand(CLI::App& app) {
   cmd->add_option("DATASET", args->path, "dataset folder")->required();
   cmd->add_option("--out", args->common.out, "output folder")->capture_default_str();
   auto* interval = cmd->add_option("--interval", args->interval,
-                                   "pair frames this many seconds apart (e.g. 2 as in the seed)");
+                                   "pair frames this many seconds apart (e.g. 2 as in the seed)")
+                       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--step", args->step, "pair frame i with frame i+N")
       ->capture_default_str()
+      ->check(CLI::PositiveNumber)
       ->excludes(interval);
   cmd->add_option("--max-pairs", args->max_pairs, "stop after N pairs (0 = all)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   AddCommonOptions(cmd, args->common);
   cmd->callback(
       [args] { RunEval(args->path, args->common, args->interval, args->step, args->max_pairs); });

@@ -10,6 +10,7 @@
 #include "commands.h"
 #include "imumatch/core/error.h"
 #include "imumatch/core/time.h"
+#include "imumatch/io/output_files.h"
 #include "imumatch/io/synthetic_io.h"
 #include "imumatch/sim/motions.h"
 #include "imumatch/sim/synthetic_sequence.h"
@@ -41,10 +42,10 @@ void RunSynth(const SynthArgs& a) {
     for (const std::string& n : names) valid += " " + n;
     throw InvalidArgument("unknown motion '" + a.motion + "'; valid names:" + valid);
   }
-  std::error_code ec;
-  if (!a.overwrite && std::filesystem::exists(a.out, ec) && !std::filesystem::is_empty(a.out, ec)) {
-    throw InvalidArgument("output folder " + a.out + " is not empty (pass --overwrite)");
-  }
+  // Writable, and empty unless --overwrite (a synthetic folder is a dataset: its files are not
+  // recorded as replaceable outputs).
+  const OutputFolderCheck check = PrepareOutputFolder(a.out, a.overwrite);
+  if (!check.note.empty()) std::cerr << "imumatch: note: " << check.note << "\n";
   SyntheticSequenceOptions options;
   options.motion = a.motion;
   options.frame_rate_hz = a.fps;

@@ -144,5 +144,79 @@ TEST_F(CliTest, BadInputsGiveClearErrorsAndExitCodes) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
 }
 
+TEST_F(CliTest, HostileInputsAndOptionsAreRefusedBeforeTheWork) {
+  const std::string pair = testing::DataPath("tum_fr1_xyz_pair");
+  // Unbounded work: refused before rendering (invalid option, 4).
+  CommandResult r = RunCli("synth --motion left30 --duration 1e6 --fps 1 --out " + Path("s1"));
+  EXPECT_EQ(r.exit_code, 4) << r.output;
+  EXPECT_NE(r.output.find("20000"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(Path("s1/rgb.txt")));
+  // Options outside their range: usage errors (2), before anything is read.
+  r = RunCli("eval " + pair + " --max-keypoints 2147483647 --out " + Path("o1"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("max-keypoints"), std::string::npos) << r.output;
+  r = RunCli("eval " + pair + " --max-pairs -1 --out " + Path("o2"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("max-pairs"), std::string::npos) << r.output;
+  // An infinite threshold or an unwritable --out: said before the evaluation runs.
+  r = RunCli("eval " + pair + " --threshold inf --out " + Path("o3"));
+  EXPECT_EQ(r.exit_code, 4) << r.output;
+  EXPECT_NE(r.output.find("--threshold"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("Table"), std::string::npos) << r.output;
+  r = RunCli("eval " + pair + " --out /proc/imumatch-out");
+  EXPECT_EQ(r.exit_code, 4) << r.output;
+  EXPECT_NE(r.output.find("/proc/imumatch-out"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("Table"), std::string::npos) << r.output;
+}
+
+TEST_F(CliTest, EvalNeverWritesIntoSomebodyElsesFolder) {
+  const std::string pair = testing::DataPath("tum_fr1_xyz_pair");
+  // --out pointing at a folder of the user's files: refused (4), nothing touched.
+  fs::create_directories(Path("mine"));
+  std::ofstream(Path("mine/report.md")) << "my own notes\n";
+  const std::string args = " --detectors orb --methods bf,guided --e2e-frames 0 --images 0";
+  CommandResult r = RunCli("eval " + pair + args + " --out " + Path("mine"));
+  EXPECT_EQ(r.exit_code, 4) << r.output;
+  EXPECT_NE(r.output.find("report.md"), std::string::npos) << r.output;
+  std::ifstream notes(Path("mine/report.md"));
+  std::string first;
+  std::getline(notes, first);
+  EXPECT_EQ(first, "my own notes");
+  // Its own earlier outputs are replaced, and it says so.
+  r = RunCli("eval " + pair + args + " --out " + Path("run"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  r = RunCli("eval " + pair + args + " --out " + Path("run"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("replacing the outputs of an earlier run"), std::string::npos)
+      << r.output;
+  // --overwrite writes into the user's folder (their other files stay).
+  std::ofstream(Path("mine/keep.txt")) << "keep\n";
+  r = RunCli("eval " + pair + args + " --overwrite --out " + Path("mine"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(fs::exists(Path("mine/keep.txt")));
+  EXPECT_TRUE(fs::exists(Path("mine/summary.csv")));
+}
+
+TEST_F(CliTest, AGroundTruthTimestampJumpIsBadDataOnItsLine) {
+  const std::string pair = testing::DataPath("tum_fr1_xyz_pair");
+  fs::create_directories(Path("tum/rgb"));
+  fs::create_directories(Path("tum/depth"));
+  fs::copy_file(pair + "/img_prev.png", Path("tum/rgb/1.000000.png"));
+  fs::copy_file(pair + "/img_curr.png", Path("tum/rgb/1.033333.png"));
+  fs::copy_file(pair + "/dep_prev.png", Path("tum/depth/1.000000.png"));
+  fs::copy_file(pair + "/dep_curr.png", Path("tum/depth/1.033333.png"));
+  std::ofstream(Path("tum/rgb.txt")) << "1.000000 rgb/1.000000.png\n1.033333 rgb/1.033333.png\n";
+  std::ofstream(Path("tum/depth.txt"))
+      << "1.000000 depth/1.000000.png\n1.033333 depth/1.033333.png\n";
+  std::ofstream gt(Path("tum/groundtruth.txt"));
+  for (int i = 0; i < 10; ++i) gt << 0.95 + 0.01 * i << " 0 0 " << 0.001 * i << " 0 0 0 1\n";
+  gt << "1000000.0 0 0 0 0 0 0 1\n";  // one line appended far ahead
+  gt.close();
+  const CommandResult r = RunCli("eval " + Path("tum") + " --out " + Path("o"));
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  EXPECT_NE(r.output.find("groundtruth.txt:11"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("jumps"), std::string::npos) << r.output;
+}
+
 }  // namespace
 }  // namespace imumatch

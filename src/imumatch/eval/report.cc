@@ -9,6 +9,7 @@
 #include <tuple>
 
 #include "imumatch/core/error.h"
+#include "imumatch/io/output_files.h"
 
 namespace imumatch {
 namespace {
@@ -456,11 +457,9 @@ std::vector<std::string> WriteReportFiles(const std::string& dir, const Evaluati
   std::vector<std::string> written;
   auto write = [&](const std::string& name, const auto& fill) {
     const std::string path = (std::filesystem::path(dir) / name).string();
-    std::ofstream out(path);
-    if (!out) throw Error("cannot write " + path);
+    std::ostringstream out;
     fill(out);
-    out.close();
-    if (!out) throw Error("error while writing " + path);
+    WriteFileAtomic(path, out.str());  // temporary file + rename: never half a report
     written.push_back(path);
   };
   const double thr = context.threshold.threshold_px;

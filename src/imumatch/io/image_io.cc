@@ -13,6 +13,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "imumatch/core/error.h"
+#include "imumatch/io/output_files.h"
 #include "imumatch/io/plausibility.h"
 
 namespace imumatch {
@@ -175,13 +176,17 @@ cv::Mat DepthToMetres(const cv::Mat& raw_depth, double depth_scale) {
 
 void WriteImage(const std::string& path, const cv::Mat& image) {
   IMUMATCH_CHECK(!image.empty(), "cannot write an empty image to " << path);
+  const std::string ext = std::filesystem::path(path).extension().string();
+  std::vector<uchar> bytes;
   bool ok = false;
   try {
-    ok = cv::imwrite(path, image);
+    ok = cv::imencode(ext.empty() ? ".png" : ext, image, bytes);
   } catch (const cv::Exception& e) {
     throw Error("cannot write image " + path + ": " + e.what());
   }
   if (!ok) throw Error("cannot write image " + path);
+  // Temporary file + rename: never a truncated image, never a hard-linked file rewritten in place.
+  WriteFileAtomic(path, std::string(bytes.begin(), bytes.end()));
 }
 
 }  // namespace imumatch

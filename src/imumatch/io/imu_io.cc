@@ -1,9 +1,11 @@
 #include "imumatch/io/imu_io.h"
 
 #include <fstream>
+#include <sstream>
 
 #include "imumatch/core/error.h"
 #include "imumatch/core/time.h"
+#include "imumatch/io/output_files.h"
 #include "imumatch/io/plausibility.h"
 #include "imumatch/io/text_parsing.h"
 
@@ -44,8 +46,7 @@ ImuBuffer ReadImuText(const std::string& path, const ImuBufferOptions& options) 
 
 void WriteImuText(const std::string& path, const std::vector<ImuSample>& samples,
                   const std::string& header_comment) {
-  std::ofstream out(path);
-  if (!out) throw Error("cannot write IMU file " + path);
+  std::ostringstream out;
   if (!header_comment.empty()) out << "# " << header_comment << "\n";
   out << "# t_s gx gy gz [rad/s] ax ay az [m/s^2]\n";
   for (const ImuSample& s : samples) {
@@ -54,8 +55,7 @@ void WriteImuText(const std::string& path, const std::vector<ImuSample>& samples
     for (int i = 0; i < 3; ++i) out << ' ' << FormatDoubleExact(s.accel_m_s2[i]);
     out << '\n';
   }
-  out.flush();
-  if (!out) throw Error("error while writing IMU file " + path);
+  WriteFileAtomic(path, out.str());
 }
 
 }  // namespace imumatch

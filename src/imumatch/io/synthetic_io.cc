@@ -10,6 +10,7 @@
 #include "imumatch/core/time.h"
 #include "imumatch/io/image_io.h"
 #include "imumatch/io/imu_io.h"
+#include "imumatch/io/output_files.h"
 #include "imumatch/io/text_parsing.h"
 #include "imumatch/io/trajectory_io.h"
 
@@ -22,10 +23,7 @@ using Json = nlohmann::ordered_json;
 Json Vec(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}); }
 
 void WriteText(const fs::path& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
-  out.flush();
-  if (!out) throw Error("cannot write " + path.string());
+  WriteFileAtomic(path.string(), text);
 }
 
 void WriteSequence(const SyntheticSequence& seq, const SyntheticSequenceOptions* generated_with,

@@ -1,9 +1,11 @@
 #include "imumatch/io/trajectory_io.h"
 
 #include <fstream>
+#include <sstream>
 
 #include "imumatch/core/error.h"
 #include "imumatch/core/time.h"
+#include "imumatch/io/output_files.h"
 #include "imumatch/io/plausibility.h"
 #include "imumatch/io/text_parsing.h"
 
@@ -52,8 +54,7 @@ void WriteTumTrajectory(const std::string& path, const std::vector<StampedPose>&
     IMUMATCH_CHECK(poses[i].t_ns > poses[i - 1].t_ns,
                    "pose timestamps must increase (index " << i << ")");
   }
-  std::ofstream out(path);
-  if (!out) throw Error("cannot write trajectory file " + path);
+  std::ostringstream out;
   if (!header_comment.empty()) out << "# " << header_comment << "\n";
   out << "# timestamp tx ty tz qx qy qz qw\n";
   for (const StampedPose& p : poses) {
@@ -65,8 +66,7 @@ void WriteTumTrajectory(const std::string& path, const std::vector<StampedPose>&
     }
     out << '\n';
   }
-  out.flush();
-  if (!out) throw Error("error while writing trajectory file " + path);
+  WriteFileAtomic(path, out.str());
 }
 
 Rigid3d ReadTumPose(const std::string& path) {
