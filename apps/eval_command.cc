@@ -196,6 +196,7 @@ void Finish(const EvaluationResult& result, ReportContext& context, const Common
                                                {"imu mode", ToString(o.motion.mode)},
                                                {"imu model", a.imu_model},
                                                {"seed", std::to_string(a.seed)}});
+  for (const std::string& w : result.warnings) std::cerr << "imumatch: warning: " << w << "\n";
   std::cout << MarkdownReport(result, context) << std::flush;
   const auto files = WriteEvaluationOutputs(a.out, result, context);
   RecordOutputs(a.out, files);

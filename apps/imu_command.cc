@@ -99,6 +99,15 @@ void RunImu(const ImuArgs& a) {
     nav = Propagate(nav, pim, d.imu_params.gravity_in_world);
   }
   if (printed == 0) throw InvalidArgument("no frame interval lies inside the IMU log");
+  const size_t intervals = d.frames.size() - 1;
+  if (static_cast<size_t>(printed) < intervals) {
+    std::printf(
+        "note: %d of %zu frame intervals printed; the others lie outside the IMU log "
+        "(%s .. %s s)\n",
+        printed, intervals, FormatNsAsSeconds(d.imu.begin_ns()).c_str(),
+        FormatNsAsSeconds(d.imu.end_ns()).c_str());
+  }
+  for (const std::string& w : d.warnings) std::printf("warning: %s\n", w.c_str());
 }
 
 }  // namespace

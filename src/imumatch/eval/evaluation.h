@@ -99,10 +99,23 @@ struct EvaluationResult {
   std::vector<SkippedPair> skipped;
   std::vector<PairVisual> visuals;
   std::vector<std::string> notes;  // e.g. "no depth in this dataset: epipolar judging only"
-  size_t pairs_total = 0;          // pairs selected
+  // Inputs that look wrong (depth images without any valid depth, ground truth that disagrees with
+  // the images or the IMU by far more than their noise, frames dropped by the loader): the
+  // figures may be meaningless. Printed by the CLI and recorded in the report.
+  std::vector<std::string> warnings;
+  size_t pairs_total = 0;  // pairs selected
   double wall_s = 0.0;
   void Append(EvaluationResult other);
 };
+
+// Sanity checks on the evaluated records: depth images without valid depth, a ground truth that
+// places brute-force matches a median over kMaxPlausibleMedianResidualPx away, and (recorded IMU)
+// an IMU rotation a median over kMaxPlausibleImuRotationErrorDeg off the ground truth. One
+// warning line each; EvaluateSource adds them to the result.
+inline constexpr double kMaxPlausibleMedianResidualPx = 8.0;
+inline constexpr double kMaxPlausibleImuRotationErrorDeg = 0.5;
+std::vector<std::string> CheckInputsLookRight(const std::vector<DetectorPairRecord>& records,
+                                              bool recorded_imu);
 
 // Evaluates every selected pair of the source. case_name labels the records (default: the
 // dataset's name). Never throws for per-pair problems (missing depth, too few features, IMU gap,

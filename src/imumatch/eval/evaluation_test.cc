@@ -4,11 +4,17 @@
 #include "imumatch/eval/end_to_end.h"
 #include "imumatch/eval/pair_motion.h"
 #include "imumatch/eval/pipelined.h"
+#include "imumatch/eval/pose_pair.h"
 #include "imumatch/eval/summary.h"
 #include "imumatch/io/dataset.h"
+#include "imumatch/io/trajectory_io.h"
 #include "imumatch/testing/test_data.h"
 
+#include <filesystem>
+#include <fstream>
+
 #include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
 
 #include "imumatch/core/error.h"
 
@@ -160,6 +166,58 @@ TEST(EvaluationTest, WindowRecallCountsTheCorrectBruteForcePartnersInside) {
   // The depth split relabels.
   rec.has_depth = true;
   EXPECT_EQ(SplitByDepth({rec})[0].case_name, "c [depth]");
+}
+
+// The TUM pair copied to a temp folder, with its depth or its second pose replaced.
+std::string PairCopy(const std::string& name, bool zero_depth, bool quaternion_wxyz) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("imumatch_eval_" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string src = testing::DataPath("tum_fr1_xyz_pair");
+  for (const char* f : {"img_prev.png", "img_curr.png", "dep_prev.png", "dep_curr.png",
+                        "pose_prev.txt", "pose_curr.txt"}) {
+    fs::copy_file(src + "/" + f, dir / f);
+  }
+  if (zero_depth) {
+    const cv::Mat depth = cv::imread(src + "/dep_prev.png", cv::IMREAD_UNCHANGED);
+    cv::imwrite((dir / "dep_prev.png").string(), cv::Mat::zeros(depth.size(), CV_16UC1));
+  }
+  if (quaternion_wxyz) {  // tx ty tz qx qy qz qw written as tx ty tz qw qx qy qz
+    const Rigid3d p = ReadTumPose(src + "/pose_curr.txt");
+    std::ofstream(dir / "pose_curr.txt")
+        << p.translation.x() << " " << p.translation.y() << " " << p.translation.z() << " "
+        << p.rotation.w() << " " << p.rotation.x() << " " << p.rotation.y() << " " << p.rotation.z()
+        << "\n";
+  }
+  return dir.string();
+}
+
+std::vector<std::string> WarningsOf(const std::string& folder) {
+  const EvalSource source = MakeDiskSource(LoadPosePairFolder(folder));
+  EvaluationOptions o;
+  o.detectors = {DetectorKind::kOrb};
+  o.methods = {MatchMethod::kBruteForce, MatchMethod::kGuided};
+  o.motion_source = MotionSource::kGroundTruth;
+  const EvaluationResult r = EvaluateSource(source, {{0, 1}}, o);
+  EXPECT_EQ(r.records.size(), 1u);
+  return r.warnings;
+}
+
+TEST(EvaluationTest, InputsThatLookWrongAreWarnedAbout) {
+  EXPECT_TRUE(WarningsOf(PairCopy("ok", false, false)).empty());
+  const auto no_depth = WarningsOf(PairCopy("zero_depth", true, false));
+  ASSERT_EQ(no_depth.size(), 1u);
+  EXPECT_NE(no_depth[0].find("no valid depth"), std::string::npos) << no_depth[0];
+  const auto swapped = WarningsOf(PairCopy("wxyz", false, true));
+  ASSERT_EQ(swapped.size(), 1u);
+  EXPECT_NE(swapped[0].find("ground truth disagrees with the images"), std::string::npos)
+      << swapped[0];
+  // A recorded IMU half a degree off the ground truth per frame interval.
+  DetectorPairRecord rec;
+  rec.motion_rotation_error_deg = 0.8;
+  EXPECT_EQ(CheckInputsLookRight({rec, rec, rec}, true).size(), 1u);
+  EXPECT_TRUE(CheckInputsLookRight({rec, rec, rec}, false).empty());  // simulated: not checked
 }
 
 TEST(EvaluationTest, GyroBiasFromTheStillStartOfARealLog) {

@@ -245,6 +245,7 @@ std::string MarkdownReport(const EvaluationResult& result, const ReportContext& 
   out << "- pairs: " << result.pairs_total << " selected, " << result.skipped.size()
       << " skipped entries; wall time " << Fixed(result.wall_s, 1) << " s\n";
   out << "- correct match: " << context.threshold.description << "\n";
+  for (const auto& w : result.warnings) out << "- **warning**: " << w << "\n";
   for (const auto& n : result.notes) out << "- note: " << n << "\n";
   out << "\n## Table I: time per pair, match ms / total ms (mean)\n\n"
       << "total = feature extraction of both frames + IMU motion + prediction + matching\n\n"
@@ -361,6 +362,7 @@ nlohmann::json ReportToJson(const EvaluationResult& result, const ReportContext&
   j["pairs_total"] = result.pairs_total;
   j["wall_s"] = result.wall_s;
   j["notes"] = result.notes;
+  j["warnings"] = result.warnings;
   json summary = json::array();
   for (const auto& s : Summarize(result.records, thr)) {
     summary.push_back({{"case", s.case_name},

@@ -149,7 +149,7 @@ std::map<int64_t, Eigen::Vector3d> ReadVelocities(const std::string& path) {
 
 // Frames from rgb (and depth, associated) lists of a TUM style folder.
 std::vector<FrameRecord> TumFrames(const TumRgbdFiles& files, int64_t max_difference_ns,
-                                   bool check_files) {
+                                   bool check_files, std::vector<std::string>* warnings) {
   const std::string rgb_list = (fs::path(files.root) / "rgb.txt").string();
   const std::string depth_list = (fs::path(files.root) / "depth.txt").string();
   std::vector<FrameRecord> frames;
@@ -171,8 +171,20 @@ std::vector<FrameRecord> TumFrames(const TumRgbdFiles& files, int64_t max_differ
   std::vector<int64_t> rgb_t, depth_t;
   for (const StampedFile& f : files.rgb) rgb_t.push_back(f.t_ns);
   for (const StampedFile& f : files.depth) depth_t.push_back(f.t_ns);
+  std::vector<char> associated(files.rgb.size(), 0);
   for (const Association& a : AssociateTimestamps(rgb_t, depth_t, max_difference_ns)) {
     add(files.rgb[a.first], &files.depth[a.second]);
+    associated[a.first] = 1;
+  }
+  if (frames.size() < files.rgb.size() && warnings != nullptr) {
+    const size_t first = static_cast<size_t>(std::find(associated.begin(), associated.end(), 0) -
+                                             associated.begin());
+    std::ostringstream msg;
+    msg << (files.rgb.size() - frames.size()) << " of " << files.rgb.size()
+        << " frames of rgb.txt have no depth image within " << max_difference_ns / 1000000.0
+        << " ms in depth.txt and are dropped (first: " << rgb_list << ":" << files.rgb[first].line
+        << ")";
+    warnings->push_back(msg.str());
   }
   return frames;
 }
@@ -244,7 +256,16 @@ Dataset LoadTumRgbdDataset(const std::string& root, const DatasetOptions& option
   } else {
     d.camera = TumCameraForFolderName(d.name);
   }
-  d.frames = TumFrames(files, options.max_time_difference_ns, options.check_files_exist);
+  d.warnings = files.warnings;
+  d.frames =
+      TumFrames(files, options.max_time_difference_ns, options.check_files_exist, &d.warnings);
+  if (fs::exists(fs::path(root) / "imu.txt", ec) &&
+      fs::exists(fs::path(root) / "velocity.txt", ec)) {
+    d.warnings.push_back(
+        "the folder has imu.txt and velocity.txt like an `imumatch synth` sequence, but no "
+        "sequence.json: read as TUM RGB-D, with an IMU simulated from groundtruth.txt (its "
+        "imu.txt is not used)");
+  }
   d.groundtruth_world_from_cam = files.groundtruth;
   const auto gt =
       LookUpGroundTruth(files.groundtruth, FrameTimes(d.frames), options.groundtruth_lookup,
@@ -443,7 +464,9 @@ Dataset LoadSyntheticDataset(const std::string& root, const DatasetOptions& opti
 
   // Frames, exact ground truth, velocities and the stored IMU.
   const TumRgbdFiles files = ReadTumRgbdFolder(root);
-  d.frames = TumFrames(files, 1, options.check_files_exist);  // identical timestamps only
+  d.warnings = files.warnings;
+  d.frames = TumFrames(files, 1, options.check_files_exist,
+                       &d.warnings);  // identical timestamps only
   d.groundtruth_world_from_cam = files.groundtruth;
   const std::string velocity_path = (fs::path(root) / "velocity.txt").string();
   std::error_code ec;

@@ -46,6 +46,9 @@ struct Dataset {
   ImuParams imu_params;         // noise model of the IMU (recorded: sensor.yaml; simulated: model)
   Rigid3d cam_from_imu;         // p_in_cam = cam_from_imu * p_in_imu
   std::vector<StampedPose> groundtruth_world_from_cam;  // full-rate ground truth (may be empty)
+  // What the loader assumed or dropped that the user should know (frames without a depth
+  // partner, a layout read as another, an unused file that could not be read), one line each.
+  std::vector<std::string> warnings;
 };
 
 struct DatasetOptions {

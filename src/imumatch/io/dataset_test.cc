@@ -425,3 +425,60 @@ TEST(Dataset, UnknownFolderAndBadOptions) {
 
 }  // namespace
 }  // namespace imumatch
+
+namespace imumatch {
+namespace {
+
+// A TUM RGB-D folder with dummy image files (not decoded while loading).
+void WriteTumFolder(const testing::TempDir& dir, int rgb_frames, int depth_frames) {
+  std::string rgb, depth, gt;
+  for (int i = 0; i < rgb_frames; ++i) {
+    const std::string t = std::to_string(1.0 + 0.1 * i);
+    rgb += t + " rgb/" + std::to_string(i) + ".png\n";
+    dir.Write("tum/rgb/" + std::to_string(i) + ".png", "x");
+    if (i < depth_frames) {
+      depth += t + " depth/" + std::to_string(i) + ".png\n";
+      dir.Write("tum/depth/" + std::to_string(i) + ".png", "x");
+    }
+  }
+  for (int i = 0; i < 20; ++i) {
+    gt += std::to_string(0.95 + 0.05 * i) + " " + std::to_string(0.01 * i) + " 0 0 0 0 0 1\n";
+  }
+  dir.Write("tum/rgb.txt", rgb);
+  dir.Write("tum/depth.txt", depth);
+  dir.Write("tum/groundtruth.txt", gt);
+}
+
+TEST(DatasetWarnings, FramesDroppedByAssociationAreSaid) {
+  testing::TempDir dir;
+  WriteTumFolder(dir, 16, 6);
+  const Dataset d = LoadDataset(dir.Path("tum"));
+  EXPECT_EQ(d.frames.size(), 6u);
+  ASSERT_EQ(d.warnings.size(), 1u);
+  EXPECT_NE(d.warnings[0].find("10 of 16 frames"), std::string::npos) << d.warnings[0];
+  EXPECT_NE(d.warnings[0].find("rgb.txt:7"), std::string::npos) << d.warnings[0];
+}
+
+TEST(DatasetWarnings, AnUnusedAccelerometerFileWithABadRowDoesNotBlock) {
+  testing::TempDir dir;
+  WriteTumFolder(dir, 4, 4);
+  dir.Write("tum/accelerometer.txt", "1.0 0 0 9.8\n1.1 0 zero 9.8\n");
+  const Dataset d = LoadDataset(dir.Path("tum"));
+  EXPECT_EQ(d.frames.size(), 4u);
+  ASSERT_EQ(d.warnings.size(), 1u);
+  EXPECT_NE(d.warnings[0].find("accelerometer.txt:2"), std::string::npos) << d.warnings[0];
+}
+
+TEST(DatasetWarnings, ASynthFolderWithoutSequenceJsonIsSaid) {
+  testing::TempDir dir;
+  WriteTumFolder(dir, 4, 4);
+  dir.Write("tum/imu.txt", "1.0 0 0 0 0 0 9.81\n");
+  dir.Write("tum/velocity.txt", "1.0 0 0 0\n");
+  const Dataset d = LoadDataset(dir.Path("tum"));
+  EXPECT_EQ(d.kind, DatasetKind::kTumRgbd);
+  ASSERT_EQ(d.warnings.size(), 1u);
+  EXPECT_NE(d.warnings[0].find("sequence.json"), std::string::npos) << d.warnings[0];
+}
+
+}  // namespace
+}  // namespace imumatch

@@ -147,7 +147,14 @@ TumRgbdFiles ReadTumRgbdFolder(const std::string& root) {
   if (fs::exists(dir / "depth.txt", ec))
     files.depth = ReadTumFileList((dir / "depth.txt").string());
   if (fs::exists(dir / "accelerometer.txt", ec)) {
-    files.accelerometer = ReadTumAccelerometer((dir / "accelerometer.txt").string());
+    // imumatch does not integrate TUM's accelerometer (there is no gyro): a bad row in it must
+    // not block the run, but is said.
+    try {
+      files.accelerometer = ReadTumAccelerometer((dir / "accelerometer.txt").string());
+    } catch (const InputError& e) {
+      files.warnings.push_back(std::string("accelerometer.txt not read (it is not used): ") +
+                               e.what());
+    }
   }
   if (fs::exists(dir / "groundtruth.txt", ec)) {
     files.groundtruth = ReadTumGroundTruth((dir / "groundtruth.txt").string());

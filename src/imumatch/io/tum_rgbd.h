@@ -79,6 +79,9 @@ struct TumRgbdFiles {
   std::vector<StampedFile> depth;
   std::vector<StampedAccel> accelerometer;
   std::vector<StampedPose> groundtruth;  // world_from_cam
+  // What was read with a problem that does not stop the run (e.g. an unused accelerometer.txt
+  // with a bad row), one line each.
+  std::vector<std::string> warnings;
 };
 TumRgbdFiles ReadTumRgbdFolder(const std::string& root);
 
