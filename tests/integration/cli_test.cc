@@ -218,5 +218,37 @@ TEST_F(CliTest, AGroundTruthTimestampJumpIsBadDataOnItsLine) {
   EXPECT_NE(r.output.find("jumps"), std::string::npos) << r.output;
 }
 
+TEST_F(CliTest, ImuSaysWhichIntervalsLieOutsideTheLog) {
+  // The EuRoC excerpt with its IMU log cut 0.74 s after the first frame.
+  const std::string src = testing::DataPath("euroc_v101_excerpt");
+  fs::copy(src, Path("v101"), fs::copy_options::recursive);
+  std::ifstream in(src + "/mav0/imu0/data.csv");
+  std::ofstream out(Path("v101/mav0/imu0/data.csv"), std::ios::trunc);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line[0] == '#' || line.substr(0, 19) <= "1403715274000000000") out << line << "\n";
+  }
+  out.close();
+  const CommandResult r = RunCli("imu --euroc " + Path("v101"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("note: 14 of 19 frame intervals printed"), std::string::npos) << r.output;
+}
+
+TEST_F(CliTest, SynthOverwriteReplacesFilesAndNeverRewritesAHardLinkedCopy) {
+  const std::string args = " --motion left30 --fps 4 --width 64 --out " + Path("seq");
+  CommandResult r = RunCli("synth" + args);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // The user keeps a hard-linked copy of a frame (cp -al), then renders again with --overwrite.
+  const fs::path frame = *fs::directory_iterator(Path("seq/rgb"));
+  fs::create_hard_link(frame, Path("kept.png"));
+  const auto size_before = fs::file_size(Path("kept.png"));
+  r = RunCli("synth" + args);
+  EXPECT_EQ(r.exit_code, 4) << r.output;  // not empty: refused without --overwrite
+  r = RunCli("synth" + args + " --overwrite --seed 7");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(fs::hard_link_count(Path("kept.png")), 1u);  // the frame was replaced, not rewritten
+  EXPECT_EQ(fs::file_size(Path("kept.png")), size_before);
+}
+
 }  // namespace
 }  // namespace imumatch

@@ -10,11 +10,16 @@
 namespace imumatch {
 
 void ImuParams::Check() const {
+  // Upper bounds 1000x a consumer MEMS part's figures: beyond them the covariances that
+  // propagate from these values are no longer meaningful (and can overflow).
   for (double v : {gyro_noise_density, gyro_random_walk, accel_noise_density, accel_random_walk}) {
-    IMUMATCH_CHECK(std::isfinite(v) && v >= 0.0, "IMU noise parameters must be finite and >= 0");
+    IMUMATCH_CHECK(std::isfinite(v) && v >= 0.0 && v <= 10.0,
+                   "IMU noise parameters must be in [0, 10] (Kalibr units), got " << v);
   }
-  IMUMATCH_CHECK(std::isfinite(rate_hz) && rate_hz > 0.0, "rate_hz=" << rate_hz);
-  IMUMATCH_CHECK(gravity_in_world.allFinite(), "gravity must be finite");
+  IMUMATCH_CHECK(std::isfinite(rate_hz) && rate_hz > 0.0 && rate_hz <= 1e5,
+                 "rate_hz must be in (0, 1e5], got " << rate_hz);
+  IMUMATCH_CHECK(gravity_in_world.allFinite() && gravity_in_world.norm() <= 100.0,
+                 "gravity must be finite and at most 100 m/s^2");
 }
 
 ImuParams ImuParams::EurocAdis16448() { return ImuParams{}; }
