@@ -8,6 +8,7 @@
 #include <optional>
 #include <sstream>
 #include <utility>
+#include <vector>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -42,10 +43,10 @@ std::string DepthText(int depth) {
   }
 }
 
-// The size a PNG or JPEG file claims in its header (nothing for other formats, or when the header
-// is not found in the first 64 KiB): checked before decoding, so that a few bytes cannot make the
-// decoder allocate gigabytes.
-std::optional<std::pair<int64_t, int64_t>> HeaderSize(const std::string& path) {
+// The size an image file claims in its header, read before decoding so that a few bytes cannot
+// make the decoder allocate gigabytes. PNG, JPEG, BMP and PNM (PGM/PPM) are read; any other
+// format is refused (InputError), since its size could not be checked first.
+std::pair<int64_t, int64_t> HeaderSize(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::string head(65536, '\0');
   in.read(head.data(), static_cast<std::streamsize>(head.size()));
@@ -55,9 +56,12 @@ std::optional<std::pair<int64_t, int64_t>> HeaderSize(const std::string& path) {
     return byte(i) << 24 | byte(i + 1) << 16 | byte(i + 2) << 8 | byte(i + 3);
   };
   auto be16 = [&](size_t i) { return byte(i) << 8 | byte(i + 1); };
+  auto le32 = [&](size_t i) {
+    return static_cast<int32_t>(byte(i) | byte(i + 1) << 8 | byte(i + 2) << 16 | byte(i + 3) << 24);
+  };
   if (head.size() >= 24 && head.compare(0, 8, "\x89PNG\r\n\x1a\n") == 0 &&
       head.compare(12, 4, "IHDR") == 0) {
-    return std::make_pair(int64_t{be32(16)}, int64_t{be32(20)});
+    return {int64_t{be32(16)}, int64_t{be32(20)}};
   }
   if (head.size() >= 4 && byte(0) == 0xFF && byte(1) == 0xD8) {  // JPEG: walk the markers
     size_t i = 2;
@@ -65,11 +69,39 @@ std::optional<std::pair<int64_t, int64_t>> HeaderSize(const std::string& path) {
       const uint32_t marker = byte(i + 1);
       const bool sof =
           marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
-      if (sof) return std::make_pair(int64_t{be16(i + 7)}, int64_t{be16(i + 5)});
+      if (sof) return {int64_t{be16(i + 7)}, int64_t{be16(i + 5)}};
       i += 2 + be16(i + 2);
     }
+    throw InputError(path, "JPEG without a frame header in its first 64 KiB");
   }
-  return std::nullopt;
+  if (head.size() >= 26 && head.compare(0, 2, "BM") == 0) {  // BMP: BITMAPINFOHEADER or later
+    const int64_t w = le32(18), h = le32(22);
+    return {w, h < 0 ? -h : h};
+  }
+  if (head.size() >= 3 && head[0] == 'P' && head[1] >= '1' && head[1] <= '6') {  // PNM
+    std::istringstream text(head.substr(2));
+    int64_t w = 0, h = 0;
+    std::string token;
+    std::vector<int64_t> v;
+    while (v.size() < 2 && text >> token) {
+      if (token[0] == '#') {
+        std::getline(text, token);
+        continue;
+      }
+      try {
+        v.push_back(std::stoll(token));
+      } catch (const std::exception&) {
+        throw InputError(path, "PNM header without a valid size");
+      }
+    }
+    if (v.size() < 2) throw InputError(path, "PNM header without a valid size");
+    w = v[0];
+    h = v[1];
+    return {w, h};
+  }
+  throw InputError(path,
+                   "not a PNG, JPEG, BMP or PNM image (the formats whose size imumatch checks "
+                   "before decoding)");
 }
 
 // imread with the checks every loader shares.
@@ -80,9 +112,8 @@ cv::Mat ReadChecked(const std::string& path, int flags) {
   if (fs::is_directory(path, ec)) throw InputError(path, "is a folder, not an image file");
   const auto bytes = fs::file_size(path, ec);
   if (!ec && bytes == 0) throw InputError(path, "image file is empty (0 bytes)");
-  if (const auto size = HeaderSize(path)) {
-    plausibility::CheckImageSize(size->first, size->second, path);
-  }
+  const auto [width, height] = HeaderSize(path);
+  plausibility::CheckImageSize(width, height, path);
   cv::Mat image;
   try {
     image = cv::imread(path, flags);

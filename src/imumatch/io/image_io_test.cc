@@ -5,6 +5,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
 
 #include "imumatch/camera/pinhole_camera.h"
 #include "imumatch/core/error.h"
@@ -73,8 +74,13 @@ TEST(ImageIo, EmptyAndUnreadableFiles) {
   const std::string empty = dir.Write("empty.png", "");
   ExpectInputError([&] { LoadImage(empty); }, empty, 0, "empty");
   const std::string garbage = dir.Write("garbage.png", "this is not a PNG file at all\n");
-  ExpectInputError([&] { LoadImage(garbage); }, garbage, 0, "cannot decode");
-  ExpectInputError([&] { LoadDepth(garbage); }, garbage, 0, "cannot decode");
+  ExpectInputError([&] { LoadImage(garbage); }, garbage, 0, "not a PNG, JPEG, BMP or PNM");
+  ExpectInputError([&] { LoadDepth(garbage); }, garbage, 0, "not a PNG, JPEG, BMP or PNM");
+  // A PNG cut after its header: the size is plausible, decoding fails.
+  std::vector<uchar> png;
+  cv::imencode(".png", cv::Mat(48, 64, CV_8UC1, cv::Scalar(9)), png);
+  const std::string cut = dir.Write("cut.png", std::string(png.begin(), png.begin() + 40));
+  ExpectInputError([&] { LoadImage(cut); }, cut, 0, "cannot decode");
 }
 
 TEST(ImageIo, RejectsEightBitDepthAndSixteenBitImage) {

@@ -3,6 +3,7 @@
 #include "imumatch/io/plausibility.h"
 
 #include <gtest/gtest.h>
+#include <opencv2/core.hpp>
 
 #include "imumatch/camera/pinhole_camera.h"
 #include "imumatch/io/dataset.h"
@@ -120,6 +121,24 @@ TEST(PlausibilityTest, AnImageHeaderClaimingAHugeSizeIsRejectedBeforeDecoding) {
   const std::string path = dir.Write("huge.png", PngHeader(32000, 32000));
   ExpectInputError([&] { LoadImage(path); }, path, 0, "32000x32000");
   ExpectInputError([&] { LoadDepth(path); }, path, 0, "not plausible");
+  // The same for BMP and PNM headers (found by fuzzing LoadImage); other formats are refused.
+  std::string bmp = "BM" + std::string(16, '\0');
+  for (int32_t v : {30000, 30000}) {
+    for (int shift = 0; shift < 32; shift += 8) bmp += static_cast<char>((v >> shift) & 0xFF);
+  }
+  bmp += std::string(28, '\0');
+  const std::string bmp_path = dir.Write("huge.bmp", bmp);
+  ExpectInputError([&] { LoadImage(bmp_path); }, bmp_path, 0, "30000x30000");
+  const std::string ppm = dir.Write("huge.ppm", "P6\n30000 30000\n65535\n0123456789");
+  ExpectInputError([&] { LoadImage(ppm); }, ppm, 0, "30000x30000");
+  const std::string tiff = dir.Write("image.tif", "II*\0 some tiff bytes");
+  ExpectInputError([&] { LoadImage(tiff); }, tiff, 0, "not a PNG, JPEG, BMP or PNM");
+  // Plausible small BMP and PGM files decode.
+  cv::Mat small(6, 8, CV_8UC1, cv::Scalar(42));
+  WriteImage(dir.Path("small.bmp"), small);
+  WriteImage(dir.Path("small.pgm"), small);
+  EXPECT_EQ(LoadImage(dir.Path("small.bmp")).at<uint8_t>(2, 3), 42);
+  EXPECT_EQ(LoadImage(dir.Path("small.pgm")).at<uint8_t>(2, 3), 42);
 }
 
 TEST(PlausibilityTest, BoundsAreStatedOnce) {
