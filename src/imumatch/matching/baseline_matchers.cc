@@ -24,6 +24,38 @@ void BruteForceOptions::Check() const {
   IMUMATCH_CHECK(max_distance >= 0.0, "max_distance=" << max_distance);
 }
 
+const char* ToString(BruteForceKernel kernel) {
+  switch (kernel) {
+    case BruteForceKernel::kAuto:
+      return "auto";
+    case BruteForceKernel::kScalar:
+      return "scalar";
+    case BruteForceKernel::kPopcnt:
+      return "popcnt";
+    case BruteForceKernel::kAvx2:
+      return "avx2";
+    case BruteForceKernel::kAvx512:
+      return "avx512";
+  }
+  return "?";
+}
+
+std::string CpuFeaturesString() {
+  std::string s;
+#if IMUMATCH_BF_X86
+  __builtin_cpu_init();
+  auto add = [&](const char* name, bool has) {
+    if (has) s += (s.empty() ? "" : " ") + std::string(name);
+  };
+  add("popcnt", __builtin_cpu_supports("popcnt"));
+  add("avx2", __builtin_cpu_supports("avx2"));
+  add("fma", __builtin_cpu_supports("fma"));
+  add("avx512f", __builtin_cpu_supports("avx512f"));
+  add("avx512vpopcntdq", __builtin_cpu_supports("avx512vpopcntdq"));
+#endif
+  return s.empty() ? "none" : s;
+}
+
 void FlannLshOptions::Check() const {
   IMUMATCH_CHECK(table_number >= 1, "table_number=" << table_number);
   IMUMATCH_CHECK(key_size >= 1 && key_size <= 32, "key_size=" << key_size);
@@ -214,71 +246,303 @@ void HammingPopcnt(const DescriptorView& a, const DescriptorView& b, Nearest2& o
   GenericKernel(a, b, out, SelectCostFunction(DescriptorNorm::kHamming, a.bytes));
 }
 
-// L2: 4 queries share every 8-float load of the B row; 4 FMA accumulators.
-__attribute__((target("avx2,fma"))) void L2Avx2(const DescriptorView& a, const DescriptorView& b,
-                                                Nearest2& out) {
-  const int n = a.rows, m = b.rows, dims = a.bytes / 4;
-  const int vec_dims = dims - dims % 8;
-  for (int j0 = 0; j0 < m; j0 += kTrainChunk / 4) {
-    const int j1 = std::min(m, j0 + kTrainChunk / 4);
-    int i = 0;
-    for (; i + kQueryBlock <= n; i += kQueryBlock) {
-      const float* q0 = reinterpret_cast<const float*>(a.Row(i));
-      const float* q1 = reinterpret_cast<const float*>(a.Row(i + 1));
-      const float* q2 = reinterpret_cast<const float*>(a.Row(i + 2));
-      const float* q3 = reinterpret_cast<const float*>(a.Row(i + 3));
-      for (int j = j0; j < j1; ++j) {
-        const float* t = reinterpret_cast<const float*>(b.Row(j));
-        __m256 s0 = _mm256_setzero_ps(), s1 = _mm256_setzero_ps(), s2 = _mm256_setzero_ps(),
-               s3 = _mm256_setzero_ps();
-        for (int k = 0; k < vec_dims; k += 8) {
-          const __m256 tv = _mm256_loadu_ps(t + k);
-          const __m256 d0 = _mm256_sub_ps(_mm256_loadu_ps(q0 + k), tv);
-          const __m256 d1 = _mm256_sub_ps(_mm256_loadu_ps(q1 + k), tv);
-          const __m256 d2 = _mm256_sub_ps(_mm256_loadu_ps(q2 + k), tv);
-          const __m256 d3 = _mm256_sub_ps(_mm256_loadu_ps(q3 + k), tv);
-          s0 = _mm256_fmadd_ps(d0, d0, s0);
-          s1 = _mm256_fmadd_ps(d1, d1, s1);
-          s2 = _mm256_fmadd_ps(d2, d2, s2);
-          s3 = _mm256_fmadd_ps(d3, d3, s3);
-        }
-        // Horizontal sums of the four accumulators at once.
-        const __m256 h01 = _mm256_hadd_ps(s0, s1), h23 = _mm256_hadd_ps(s2, s3);
-        const __m256 h = _mm256_hadd_ps(h01, h23);
-        const __m128 sum = _mm_add_ps(_mm256_castps256_ps128(h), _mm256_extractf128_ps(h, 1));
-        alignas(16) float d[4];
-        _mm_store_ps(d, sum);
-        const float* qs[4] = {q0, q1, q2, q3};
-        for (int u = 0; u < kQueryBlock; ++u) {
-          for (int k = vec_dims; k < dims; ++k) d[u] += (qs[u][k] - t[k]) * (qs[u][k] - t[k]);
-          Update(d[u], j, out.best[i + u], out.second[i + u], out.best_idx[i + u]);
-        }
+// ---- Wide kernels ----------------------------------------------------------------------------
+// Hamming: B is transposed into blocks of L rows, word-major (block k, word w holds word w of rows
+// kL .. kL+L-1), so one vector register holds the same word of L train descriptors and a query word
+// is broadcast against it. Each lane keeps its own best / second / index (ties: earliest index);
+// the lanes are merged at the end, ties again to the earliest index, which is exactly what the
+// scalar loop over j gives.
+constexpr uint64_t kFar = uint64_t{1} << 40;  // farther than any Hamming distance
+
+std::vector<uint64_t> TransposeWords(const DescriptorView& b, int lanes) {
+  const int words = b.bytes / 8, blocks = (b.rows + lanes - 1) / lanes;
+  std::vector<uint64_t> t(static_cast<size_t>(blocks) * words * lanes, 0);
+  for (int j = 0; j < b.rows; ++j) {
+    const int blk = j / lanes, lane = j % lanes;
+    for (int w = 0; w < words; ++w) {
+      t[(static_cast<size_t>(blk) * words + w) * lanes + lane] = Load64(b.Row(j) + 8 * w);
+    }
+  }
+  return t;
+}
+
+// Merges per-lane nearest two (lanes of one query) into out's entry i.
+void MergeLanes(const uint64_t* best, const uint64_t* second, const int64_t* idx, int lanes, int i,
+                Nearest2& out) {
+  int star = -1;
+  for (int l = 0; l < lanes; ++l) {
+    if (best[l] >= kFar) continue;
+    if (star < 0 || best[l] < best[star] || (best[l] == best[star] && idx[l] < idx[star])) {
+      star = l;
+    }
+  }
+  if (star < 0) return;
+  uint64_t sec = kFar;
+  for (int l = 0; l < lanes; ++l) {
+    sec = std::min(sec, second[l]);
+    if (l != star) sec = std::min(sec, best[l]);
+  }
+  out.best[i] = static_cast<float>(best[star]);
+  out.best_idx[i] = static_cast<int>(idx[star]);
+  out.second[i] = sec < kFar ? static_cast<float>(sec) : std::numeric_limits<float>::infinity();
+}
+
+__attribute__((target("avx512f,avx512vpopcntdq"))) void HammingAvx512(const DescriptorView& a,
+                                                                      const DescriptorView& b,
+                                                                      Nearest2& out) {
+  constexpr int L = 8;
+  const int words = a.bytes / 8, m = b.rows, blocks = (m + L - 1) / L;
+  const std::vector<uint64_t> bt = TransposeWords(b, L);
+  const __mmask8 last =
+      m % L == 0 ? static_cast<__mmask8>(0xFF) : static_cast<__mmask8>((1u << (m % L)) - 1u);
+  const __m512i far = _mm512_set1_epi64(static_cast<long long>(kFar));
+  const __m512i step = _mm512_set1_epi64(L);
+  alignas(64) uint64_t best_l[L], second_l[L];
+  alignas(64) int64_t idx_l[L];
+  __m512i q[8];
+  for (int i = 0; i < a.rows; ++i) {
+    for (int w = 0; w < words; ++w) {
+      q[w] = _mm512_set1_epi64(static_cast<long long>(Load64(a.Row(i) + 8 * w)));
+    }
+    __m512i best = far, second = far, idx = _mm512_set1_epi64(-1);
+    __m512i jv = _mm512_setr_epi64(0, 1, 2, 3, 4, 5, 6, 7);
+    const uint64_t* col = bt.data();
+    for (int blk = 0; blk < blocks; ++blk, col += static_cast<size_t>(words) * L) {
+      __m512i d = _mm512_popcnt_epi64(_mm512_xor_si512(q[0], _mm512_loadu_si512(col)));
+      for (int w = 1; w < words; ++w) {
+        d = _mm512_add_epi64(
+            d, _mm512_popcnt_epi64(_mm512_xor_si512(q[w], _mm512_loadu_si512(col + w * L))));
+      }
+      if (blk == blocks - 1) d = _mm512_mask_mov_epi64(far, last, d);
+      const __mmask8 lt = _mm512_cmplt_epu64_mask(d, best);
+      // (Masked forms with an explicit source: GCC 12 warns that the unmasked ones read an
+      // undefined register.)
+      const __m512i d_max = _mm512_mask_max_epu64(d, 0xFF, d, best);
+      second = _mm512_mask_min_epu64(second, 0xFF, second, d_max);
+      best = _mm512_mask_min_epu64(best, 0xFF, best, d);
+      idx = _mm512_mask_mov_epi64(idx, lt, jv);
+      jv = _mm512_add_epi64(jv, step);
+    }
+    _mm512_store_si512(best_l, best);
+    _mm512_store_si512(second_l, second);
+    _mm512_store_si512(idx_l, idx);
+    MergeLanes(best_l, second_l, idx_l, L, i, out);
+  }
+}
+
+__attribute__((target("avx2"))) void HammingAvx2(const DescriptorView& a, const DescriptorView& b,
+                                                 Nearest2& out) {
+  constexpr int L = 4;
+  const int words = a.bytes / 8, m = b.rows, blocks = (m + L - 1) / L;
+  const std::vector<uint64_t> bt = TransposeWords(b, L);
+  const __m256i lut = _mm256_setr_epi8(0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4, 0, 1, 1, 2,
+                                       1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4);
+  const __m256i nibble = _mm256_set1_epi8(0x0F), zero = _mm256_setzero_si256();
+  const __m256i far = _mm256_set1_epi64x(static_cast<long long>(kFar));
+  const __m256i step = _mm256_set1_epi64x(L);
+  alignas(32) int64_t lane_valid[L];
+  for (int l = 0; l < L; ++l) lane_valid[l] = (blocks - 1) * L + l < m ? -1 : 0;
+  const __m256i last_valid = _mm256_load_si256(reinterpret_cast<const __m256i*>(lane_valid));
+  alignas(32) uint64_t best_l[L], second_l[L];
+  alignas(32) int64_t idx_l[L];
+  __m256i q[8];
+  for (int i = 0; i < a.rows; ++i) {
+    for (int w = 0; w < words; ++w) {
+      q[w] = _mm256_set1_epi64x(static_cast<long long>(Load64(a.Row(i) + 8 * w)));
+    }
+    __m256i best = far, second = far, idx = _mm256_set1_epi64x(-1);
+    __m256i jv = _mm256_setr_epi64x(0, 1, 2, 3);
+    const uint64_t* col = bt.data();
+    for (int blk = 0; blk < blocks; ++blk, col += static_cast<size_t>(words) * L) {
+      // Byte counts (at most 8 per byte per word, 64 for 8 words) summed over the words, then
+      // over the 8 bytes of each 64-bit lane.
+      __m256i bytes = zero;
+      for (int w = 0; w < words; ++w) {
+        const __m256i x = _mm256_xor_si256(
+            q[w], _mm256_loadu_si256(reinterpret_cast<const __m256i*>(col + w * L)));
+        const __m256i lo = _mm256_and_si256(x, nibble);
+        const __m256i hi = _mm256_and_si256(_mm256_srli_epi16(x, 4), nibble);
+        bytes = _mm256_add_epi8(
+            bytes, _mm256_add_epi8(_mm256_shuffle_epi8(lut, lo), _mm256_shuffle_epi8(lut, hi)));
+      }
+      __m256i d = _mm256_sad_epu8(bytes, zero);
+      if (blk == blocks - 1) d = _mm256_blendv_epi8(far, d, last_valid);
+      // Distances are < 2^41: signed 64-bit compares are exact.
+      const __m256i lt = _mm256_cmpgt_epi64(best, d);         // d < best
+      const __m256i d_max = _mm256_blendv_epi8(d, best, lt);  // max(d, best)
+      second = _mm256_blendv_epi8(second, d_max, _mm256_cmpgt_epi64(second, d_max));
+      best = _mm256_blendv_epi8(best, d, lt);
+      idx = _mm256_blendv_epi8(idx, jv, lt);
+      jv = _mm256_add_epi64(jv, step);
+    }
+    _mm256_store_si256(reinterpret_cast<__m256i*>(best_l), best);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(second_l), second);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(idx_l), idx);
+    MergeLanes(best_l, second_l, idx_l, L, i, out);
+  }
+}
+
+// L2 in one summation order on every path, so that all paths give the same bits: 16 partial sums,
+// element k into partial k mod 16 (a multiply, then an add: no fused multiply-add, which the
+// scalar path would have to emulate slowly) in increasing k, then the fixed tree
+// ((p0+p8)+(p4+p12)) + ((p2+p10)+(p6+p14)) + ... below. AVX-512 holds the 16 partials in one
+// register, AVX2 in two, the scalar path in an array.
+inline float ReducePartials(const float* p) {
+  float h[8];
+  for (int l = 0; l < 8; ++l) h[l] = p[l] + p[l + 8];
+  float g[4];
+  for (int l = 0; l < 4; ++l) g[l] = h[l] + h[l + 4];
+  return (g[0] + g[2]) + (g[1] + g[3]);
+}
+
+float L2Canonical(const float* a, const float* b, int dims) {
+  float p[16] = {0};
+  for (int k = 0; k < dims; ++k) {
+    const float d = a[k] - b[k];
+    const float dd = d * d;
+    p[k % 16] = p[k % 16] + dd;
+  }
+  return ReducePartials(p);
+}
+
+void L2Scalar(const DescriptorView& a, const DescriptorView& b, Nearest2& out) {
+  const int dims = a.bytes / 4;
+  for (int i = 0; i < a.rows; ++i) {
+    const float* q = reinterpret_cast<const float*>(a.Row(i));
+    for (int j = 0; j < b.rows; ++j) {
+      Update(L2Canonical(q, reinterpret_cast<const float*>(b.Row(j)), dims), j, out.best[i],
+             out.second[i], out.best_idx[i]);
+    }
+  }
+}
+
+// Tail elements (k >= the last multiple of 16) go into their partials after the vector part, in
+// increasing k: the same order as L2Canonical.
+inline void AddTail(const float* q, const float* t, int from, int dims, float* p) {
+  for (int k = from; k < dims; ++k) {
+    const float d = q[k] - t[k];
+    const float dd = d * d;
+    p[k % 16] = p[k % 16] + dd;
+  }
+}
+
+__attribute__((target("avx512f"))) void L2Avx512(const DescriptorView& a, const DescriptorView& b,
+                                                 Nearest2& out) {
+  const int dims = a.bytes / 4, vec = dims - dims % 16;
+  alignas(64) float p[4][16];
+  for (int i0 = 0; i0 < a.rows; i0 += kQueryBlock) {
+    const int nq = std::min(kQueryBlock, a.rows - i0);
+    const float* q[kQueryBlock];
+    for (int u = 0; u < kQueryBlock; ++u) {
+      q[u] = reinterpret_cast<const float*>(a.Row(i0 + std::min(u, nq - 1)));
+    }
+    for (int j = 0; j < b.rows; ++j) {
+      const float* t = reinterpret_cast<const float*>(b.Row(j));
+      __m512 s0 = _mm512_setzero_ps(), s1 = s0, s2 = s0, s3 = s0;
+      for (int k = 0; k < vec; k += 16) {
+        const __m512 tv = _mm512_loadu_ps(t + k);
+        const __m512 d0 = _mm512_sub_ps(_mm512_loadu_ps(q[0] + k), tv);
+        const __m512 d1 = _mm512_sub_ps(_mm512_loadu_ps(q[1] + k), tv);
+        const __m512 d2 = _mm512_sub_ps(_mm512_loadu_ps(q[2] + k), tv);
+        const __m512 d3 = _mm512_sub_ps(_mm512_loadu_ps(q[3] + k), tv);
+        s0 = _mm512_add_ps(s0, _mm512_mul_ps(d0, d0));
+        s1 = _mm512_add_ps(s1, _mm512_mul_ps(d1, d1));
+        s2 = _mm512_add_ps(s2, _mm512_mul_ps(d2, d2));
+        s3 = _mm512_add_ps(s3, _mm512_mul_ps(d3, d3));
+      }
+      _mm512_store_ps(p[0], s0);
+      _mm512_store_ps(p[1], s1);
+      _mm512_store_ps(p[2], s2);
+      _mm512_store_ps(p[3], s3);
+      for (int u = 0; u < nq; ++u) {
+        AddTail(q[u], t, vec, dims, p[u]);
+        Update(ReducePartials(p[u]), j, out.best[i0 + u], out.second[i0 + u], out.best_idx[i0 + u]);
       }
     }
-    for (; i < n; ++i) {
-      for (int j = j0; j < j1; ++j) {
-        const float d = L2DistanceSquared(reinterpret_cast<const float*>(a.Row(i)),
-                                          reinterpret_cast<const float*>(b.Row(j)), dims);
-        Update(d, j, out.best[i], out.second[i], out.best_idx[i]);
+  }
+}
+
+__attribute__((target("avx2"))) void L2Avx2(const DescriptorView& a, const DescriptorView& b,
+                                            Nearest2& out) {
+  const int dims = a.bytes / 4, vec = dims - dims % 16;
+  alignas(32) float p[4][16];
+  for (int i0 = 0; i0 < a.rows; i0 += kQueryBlock) {
+    const int nq = std::min(kQueryBlock, a.rows - i0);
+    const float* q[kQueryBlock];
+    for (int u = 0; u < kQueryBlock; ++u) {
+      q[u] = reinterpret_cast<const float*>(a.Row(i0 + std::min(u, nq - 1)));
+    }
+    for (int j = 0; j < b.rows; ++j) {
+      const float* t = reinterpret_cast<const float*>(b.Row(j));
+      __m256 lo[4], hi[4];
+      for (int u = 0; u < 4; ++u) lo[u] = hi[u] = _mm256_setzero_ps();
+      for (int k = 0; k < vec; k += 16) {
+        const __m256 tl = _mm256_loadu_ps(t + k), th = _mm256_loadu_ps(t + k + 8);
+        for (int u = 0; u < 4; ++u) {
+          const __m256 dl = _mm256_sub_ps(_mm256_loadu_ps(q[u] + k), tl);
+          const __m256 dh = _mm256_sub_ps(_mm256_loadu_ps(q[u] + k + 8), th);
+          lo[u] = _mm256_add_ps(lo[u], _mm256_mul_ps(dl, dl));
+          hi[u] = _mm256_add_ps(hi[u], _mm256_mul_ps(dh, dh));
+        }
+      }
+      for (int u = 0; u < nq; ++u) {
+        _mm256_store_ps(p[u], lo[u]);
+        _mm256_store_ps(p[u] + 8, hi[u]);
+        AddTail(q[u], t, vec, dims, p[u]);
+        Update(ReducePartials(p[u]), j, out.best[i0 + u], out.second[i0 + u], out.best_idx[i0 + u]);
       }
     }
   }
 }
 #endif
 
-void NearestTwo(const DescriptorView& a, const DescriptorView& b, Nearest2& out) {
+bool CpuHas(BruteForceKernel k) {
+#if IMUMATCH_BF_X86
+  switch (k) {
+    case BruteForceKernel::kAuto:
+    case BruteForceKernel::kScalar:
+      return true;
+    case BruteForceKernel::kPopcnt:
+      return __builtin_cpu_supports("popcnt");
+    case BruteForceKernel::kAvx2:
+      return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+    case BruteForceKernel::kAvx512:
+      return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vpopcntdq");
+  }
+  return false;
+#else
+  return k == BruteForceKernel::kAuto || k == BruteForceKernel::kScalar;
+#endif
+}
+
+void NearestTwo(const DescriptorView& a, const DescriptorView& b, BruteForceKernel kernel,
+                Nearest2& out) {
   out.Reset(a.rows);
   if (a.rows == 0 || b.rows == 0) return;
+  if (kernel == BruteForceKernel::kAuto) kernel = AvailableBruteForceKernels().back();
+  IMUMATCH_CHECK(CpuHas(kernel),
+                 "this CPU cannot run the " << ToString(kernel) << " brute-force path");
   if (a.norm == DescriptorNorm::kHamming) {
 #if IMUMATCH_BF_X86
-    if (__builtin_cpu_supports("popcnt")) return HammingPopcnt(a, b, out);
+    switch (kernel) {
+      case BruteForceKernel::kAvx512:
+        if (a.bytes <= 64) return HammingAvx512(a, b, out);
+        break;
+      case BruteForceKernel::kAvx2:
+        if (a.bytes <= 64) return HammingAvx2(a, b, out);
+        break;
+      default:
+        break;
+    }
+    if (kernel != BruteForceKernel::kScalar) return HammingPopcnt(a, b, out);
 #endif
     return HammingPortable(a, b, out);
   }
 #if IMUMATCH_BF_X86
-  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) return L2Avx2(a, b, out);
+  if (kernel == BruteForceKernel::kAvx512) return L2Avx512(a, b, out);
+  if (kernel == BruteForceKernel::kAvx2) return L2Avx2(a, b, out);
 #endif
-  GenericKernel(a, b, out, SelectCostFunction(DescriptorNorm::kL2, a.bytes));
+  L2Scalar(a, b, out);
 }
 
 int CvNorm(const cv::Mat& d) { return d.depth() == CV_8U ? cv::NORM_HAMMING : cv::NORM_L2; }
@@ -313,6 +577,15 @@ std::vector<Match> KnnToRatioMatches(const std::vector<std::vector<cv::DMatch>>&
 
 }  // namespace
 
+std::vector<BruteForceKernel> AvailableBruteForceKernels() {
+  std::vector<BruteForceKernel> out;
+  for (BruteForceKernel k : {BruteForceKernel::kScalar, BruteForceKernel::kPopcnt,
+                             BruteForceKernel::kAvx2, BruteForceKernel::kAvx512}) {
+    if (CpuHas(k)) out.push_back(k);
+  }
+  return out;
+}
+
 std::vector<Match> MatchBruteForce(const cv::Mat& descriptors_a, const cv::Mat& descriptors_b,
                                    const BruteForceOptions& options) {
   options.Check();
@@ -322,9 +595,9 @@ std::vector<Match> MatchBruteForce(const cv::Mat& descriptors_a, const cv::Mat& 
   std::vector<Match> out;
   if (a.rows == 0 || b.rows == 0) return out;
   Nearest2 fwd;
-  NearestTwo(a, b, fwd);
+  NearestTwo(a, b, options.kernel, fwd);
   Nearest2 rev;
-  if (options.cross_check) NearestTwo(b, a, rev);
+  if (options.cross_check) NearestTwo(b, a, options.kernel, rev);
   const DescriptorNorm norm = a.norm;
   const float ratio_cost = static_cast<float>(
       norm == DescriptorNorm::kL2 ? options.ratio * options.ratio : options.ratio);

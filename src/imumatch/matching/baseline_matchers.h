@@ -1,6 +1,7 @@
 #pragma once
 
 #include <limits>
+#include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -12,6 +13,22 @@ namespace imumatch {
 // Unguided baselines on the same descriptors, all returning imumatch::Match (second_distance is
 // +inf where the method does not produce one; predicted_uv is NaN).
 
+// The instruction-set paths of the exhaustive matcher. kAuto picks the fastest the CPU has (checked
+// at run time: one binary runs everywhere); the others force a path, for tests and benchmarks, and
+// throw InvalidArgument when the CPU lacks it. Every path gives the same matches bit for bit.
+enum class BruteForceKernel {
+  kAuto,
+  kScalar,  // portable C++ (no POPCNT instruction)
+  kPopcnt,  // 64-bit POPCNT, 4 queries per pass; L2: SSE2 (Hamming only differs from scalar)
+  kAvx2,    // Hamming: nibble-table popcount (PSHUFB) over 4 descriptors per register; L2: AVX2+FMA
+  kAvx512,  // Hamming: VPOPCNTQ over 8 descriptors per register; L2: AVX-512F FMA
+};
+const char* ToString(BruteForceKernel kernel);
+// The paths this CPU can run, kScalar first, the fastest last (what kAuto uses).
+std::vector<BruteForceKernel> AvailableBruteForceKernels();
+// The CPU features the fast paths look for, e.g. "popcnt avx2 fma avx512f avx512vpopcntdq".
+std::string CpuFeaturesString();
+
 struct BruteForceOptions {
   // Lowe's ratio test on distances: keep best < ratio * second. 1 disables it (every query keeps
   // its nearest neighbour).
@@ -20,6 +37,7 @@ struct BruteForceOptions {
   double max_distance = std::numeric_limits<double>::infinity();
   // Keep i -> j only when i is also j's nearest neighbour in A.
   bool cross_check = false;
+  BruteForceKernel kernel = BruteForceKernel::kAuto;
   void Check() const;
 };
 

@@ -1,6 +1,9 @@
 #include "imumatch/matching/baseline_matchers.h"
 
+#include <algorithm>
+#include <cstdio>
 #include <random>
+#include <string>
 
 #include <gtest/gtest.h>
 #include <opencv2/features2d.hpp>
@@ -50,6 +53,81 @@ void ExpectSameNearest(const std::vector<Match>& ours, const std::vector<cv::DMa
     }
   }
   EXPECT_GT(same_index, static_cast<int>(ours.size()) * 9 / 10);
+}
+
+// Every path this CPU can run gives the scalar path's matches bit for bit: indices, distances and
+// second distances, with and without the ratio test and cross check.
+void ExpectAllKernelsEqual(const cv::Mat& a, const cv::Mat& b, const std::string& what) {
+  const std::vector<BruteForceKernel> kernels = AvailableBruteForceKernels();
+  ASSERT_EQ(kernels.front(), BruteForceKernel::kScalar);
+  for (const double ratio : {1.0, 0.8}) {
+    for (const bool cross : {false, true}) {
+      BruteForceOptions o;
+      o.ratio = ratio;
+      o.cross_check = cross;
+      o.kernel = BruteForceKernel::kScalar;
+      const std::vector<Match> reference = MatchBruteForce(a, b, o);
+      if (ratio == 1.0 && !cross) {
+        ASSERT_EQ(reference.size(), static_cast<size_t>(a.rows)) << what;
+      }
+      for (BruteForceKernel k : kernels) {
+        o.kernel = k;
+        const std::vector<Match> got = MatchBruteForce(a, b, o);
+        ASSERT_EQ(got.size(), reference.size()) << what << " " << ToString(k);
+        for (size_t i = 0; i < got.size(); ++i) {
+          ASSERT_EQ(got[i].query_idx, reference[i].query_idx) << what << " " << ToString(k);
+          ASSERT_EQ(got[i].train_idx, reference[i].train_idx) << what << " " << ToString(k);
+          ASSERT_EQ(got[i].distance, reference[i].distance) << what << " " << ToString(k);
+          ASSERT_EQ(got[i].second_distance, reference[i].second_distance)
+              << what << " " << ToString(k);
+        }
+      }
+    }
+  }
+}
+
+TEST(BaselineMatchersTest, EveryKernelEqualsTheScalarPathBitForBit) {
+  std::printf("brute-force paths on this CPU (%s):", CpuFeaturesString().c_str());
+  for (BruteForceKernel k : AvailableBruteForceKernels()) std::printf(" %s", ToString(k));
+  std::printf("\n");
+  // Binary: 32 (ORB, BRIEF), 61 padded to 64 (AKAZE), 64 bytes (BRISK); row counts that are not
+  // multiples of any block or lane count; duplicate rows make exact ties.
+  for (int bytes : {32, 61, 64}) {
+    cv::Mat a, b;
+    MakeBinaryPair(203, 150, bytes, 5 + bytes, a, b);
+    if (bytes == 61) {
+      cv::Mat pa = cv::Mat::zeros(a.rows, 64, CV_8U), pb = cv::Mat::zeros(b.rows, 64, CV_8U);
+      a.copyTo(pa(cv::Rect(0, 0, 61, a.rows)));
+      b.copyTo(pb(cv::Rect(0, 0, 61, b.rows)));
+      a = pa;
+      b = pb;
+    }
+    b.row(3).copyTo(b.row(7));  // a tie at the same distance from every query
+    ExpectAllKernelsEqual(a, b, std::to_string(bytes) + " bytes");
+    ExpectAllKernelsEqual(a.rowRange(0, 1), b.rowRange(0, 9), "1 x 9");
+  }
+  // Float: 64 (SURF) and 128 (SIFT) dims, and 70 (a tail after the last 16).
+  cv::RNG rng(11);
+  for (int dims : {64, 128, 70}) {
+    cv::Mat a(157, dims, CV_32F), b(131, dims, CV_32F);
+    rng.fill(a, cv::RNG::UNIFORM, 0.0, 1.0);
+    rng.fill(b, cv::RNG::UNIFORM, 0.0, 1.0);
+    a.row(4).copyTo(b.row(9));
+    b.row(9).copyTo(b.row(20));  // an exact tie
+    ExpectAllKernelsEqual(a, b, std::to_string(dims) + " floats");
+  }
+}
+
+TEST(BaselineMatchersTest, AKernelTheCpuLacksIsRefused) {
+  const auto kernels = AvailableBruteForceKernels();
+  for (BruteForceKernel k :
+       {BruteForceKernel::kPopcnt, BruteForceKernel::kAvx2, BruteForceKernel::kAvx512}) {
+    if (std::find(kernels.begin(), kernels.end(), k) != kernels.end()) continue;
+    BruteForceOptions o;
+    o.kernel = k;
+    EXPECT_THROW(MatchBruteForce(cv::Mat::zeros(2, 32, CV_8U), cv::Mat::zeros(2, 32, CV_8U), o),
+                 InvalidArgument);
+  }
 }
 
 TEST(BaselineMatchersTest, OwnBruteForceEqualsOpenCvForBinary) {

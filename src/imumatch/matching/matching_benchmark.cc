@@ -183,6 +183,35 @@ void BM_OwnBruteForceRatio(benchmark::State& state) {
   SetCounters(state, s, matches);
 }
 
+// Own brute force + ratio on one forced instruction-set path (range 2: BruteForceKernel).
+void BM_OwnBruteForceKernel(benchmark::State& state) {
+  const FeatureSet& s = GetFeatures(static_cast<int>(state.range(0)), state.range(1));
+  BruteForceOptions options;
+  options.ratio = 0.8;
+  options.kernel = static_cast<BruteForceKernel>(state.range(2));
+  const auto available = AvailableBruteForceKernels();
+  if (std::find(available.begin(), available.end(), options.kernel) == available.end()) {
+    state.SkipWithError("path not available on this CPU");
+    return;
+  }
+  size_t matches = 0;
+  for (auto _ : state) {
+    std::vector<Match> m = MatchBruteForce(s.desc_a, s.desc_b, options);
+    matches = m.size();
+    benchmark::DoNotOptimize(m.data());
+  }
+  SetCounters(state, s, matches);
+}
+
+void KernelSizes(benchmark::internal::Benchmark* b) {
+  for (int k = 1; k <= 4; ++k) {
+    b->Args({0, 1000, k});
+    b->Args({0, 4000, k});
+    b->Args({1, 1000, k});
+  }
+  b->ArgNames({"sift", "n", "kernel"});
+}
+
 void BM_FlannLsh(benchmark::State& state) {
   const FeatureSet& s = GetFeatures(static_cast<int>(state.range(0)), state.range(1));
   size_t matches = 0;
@@ -203,6 +232,7 @@ void OrbSizes(benchmark::internal::Benchmark* b) {
 BENCHMARK(BM_Guided)->Apply(OrbSizes)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_CvKnnRatio)->Apply(OrbSizes)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_OwnBruteForceRatio)->Apply(OrbSizes)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_OwnBruteForceKernel)->Apply(KernelSizes)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_GuidedWithDistortion)
     ->Args({0, 1000})
     ->ArgNames({"sift", "n"})
@@ -276,6 +306,30 @@ void PrintSummary(const CapturingReporter& rep) {
     auto it = rep.times_us.find(name);
     return it == rep.times_us.end() ? -1.0 : it->second;
   };
+  std::printf(
+      "\nOwn brute force + ratio per instruction-set path vs cv::BFMatcher::knnMatch + ratio, "
+      "same descriptors, wall time (CPU: %s; auto = %s)\n",
+      CpuFeaturesString().c_str(), ToString(AvailableBruteForceKernels().back()));
+  std::printf("%-10s %8s %12s", "features", "n", "knn[us]");
+  for (int k = 1; k <= 4; ++k) {
+    std::printf(" %10s[us] %6s", ToString(static_cast<BruteForceKernel>(k)), "x");
+  }
+  std::printf("\n");
+  for (const auto& [kind, n] : std::vector<std::pair<int, int>>{{0, 1000}, {0, 4000}, {1, 1000}}) {
+    const std::string args = "/sift:" + std::to_string(kind) + "/n:" + std::to_string(n);
+    const double knn = get("BM_CvKnnRatio" + args);
+    if (knn <= 0) continue;
+    std::printf("%-10s %8d %12.1f", kind ? "SIFT" : "ORB", n, knn);
+    for (int k = 1; k <= 4; ++k) {
+      const double t = get("BM_OwnBruteForceKernel" + args + "/kernel:" + std::to_string(k));
+      if (t > 0) {
+        std::printf(" %14.1f %5.1fx", t, knn / t);
+      } else {
+        std::printf(" %14s %6s", "-", "-");
+      }
+    }
+    std::printf("\n");
+  }
   const double gd = get("BM_GuidedWithDistortion/sift:0/n:1000");
   const double g1 = get("BM_GuidedFr1Pinhole/sift:0/n:1000");
   if (gd > 0 && g1 > 0) {

@@ -182,3 +182,33 @@ TEST(TumPairTest, GuidedBeatsKnnRatioForSift) {
 
 }  // namespace
 }  // namespace imumatch
+
+namespace imumatch {
+namespace {
+
+// On real descriptors too, every brute-force path this CPU runs equals the scalar one bit for bit.
+TEST(TumPairTest, EveryBruteForcePathGivesTheScalarMatchesOnRealDescriptors) {
+  for (const cv::Ptr<cv::Feature2D>& detector : {cv::Ptr<cv::Feature2D>(cv::ORB::create(1000)),
+                                                 cv::Ptr<cv::Feature2D>(cv::SIFT::create(500)),
+                                                 cv::Ptr<cv::Feature2D>(cv::BRISK::create())}) {
+    const Features f = Detect(detector);
+    BruteForceOptions o;
+    o.ratio = 0.8;
+    o.kernel = BruteForceKernel::kScalar;
+    const std::vector<Match> reference = MatchBruteForce(f.desc_a, f.desc_b, o);
+    ASSERT_GT(reference.size(), 100u) << detector->getDefaultName();
+    for (BruteForceKernel k : AvailableBruteForceKernels()) {
+      o.kernel = k;
+      const std::vector<Match> got = MatchBruteForce(f.desc_a, f.desc_b, o);
+      ASSERT_EQ(got.size(), reference.size()) << ToString(k);
+      for (size_t i = 0; i < got.size(); ++i) {
+        EXPECT_EQ(got[i].train_idx, reference[i].train_idx) << ToString(k);
+        EXPECT_EQ(got[i].distance, reference[i].distance) << ToString(k);
+        EXPECT_EQ(got[i].second_distance, reference[i].second_distance) << ToString(k);
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace imumatch
