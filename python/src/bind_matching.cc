@@ -96,9 +96,27 @@ cv::Mat Descriptors(const py::handle& h, const char* what, MatView& keep) {
   return PadBinaryDescriptors(keep.mat);
 }
 
+BruteForceKernel ParseKernel(const std::string& name) {
+  for (BruteForceKernel k :
+       {BruteForceKernel::kAuto, BruteForceKernel::kScalar, BruteForceKernel::kPopcnt,
+        BruteForceKernel::kAvx2, BruteForceKernel::kAvx512}) {
+    if (name == ToString(k)) return k;
+  }
+  throw InvalidArgument("kernel: '" + name + "' is not auto, scalar, popcnt, avx2 or avx512");
+}
+
 }  // namespace
 
 void BindMatching(py::module_& m) {
+  m.def(
+      "brute_force_kernels",
+      [] {
+        std::vector<std::string> out;
+        for (BruteForceKernel k : AvailableBruteForceKernels()) out.push_back(ToString(k));
+        return out;
+      },
+      "The brute-force paths this CPU runs, fastest last (what 'auto' uses).");
+  m.def("cpu_features", &CpuFeaturesString, "The CPU features the fast paths use.");
   // ------------------------------------------------------------------------------ features
   py::class_<FeatureOptions>(m, "FeatureOptions", "Settings of the detector factory.")
       .def(py::init<>(), "The defaults.")
@@ -492,7 +510,7 @@ refined to sub-pixel accuracy (refined_uv_b) and unalignable ones dropped.)");
   m.def(
       "match_brute_force",
       [](const py::handle& descriptors_a, const py::handle& descriptors_b, double ratio,
-         double max_distance, bool cross_check) {
+         double max_distance, bool cross_check, const std::string& kernel) {
         MatView keep_a, keep_b;
         const cv::Mat da = Descriptors(descriptors_a, "descriptors_a", keep_a);
         const cv::Mat db = Descriptors(descriptors_b, "descriptors_b", keep_b);
@@ -500,6 +518,7 @@ refined to sub-pixel accuracy (refined_uv_b) and unalignable ones dropped.)");
         o.ratio = ratio;
         o.max_distance = max_distance;
         o.cross_check = cross_check;
+        o.kernel = ParseKernel(kernel);
         PyMatchResult out;
         py::gil_scoped_release release;
         out.result.matches = MatchBruteForce(da, db, o);
@@ -507,8 +526,9 @@ refined to sub-pixel accuracy (refined_uv_b) and unalignable ones dropped.)");
       },
       py::arg("descriptors_a"), py::arg("descriptors_b"), py::arg("ratio") = 0.8,
       py::arg("max_distance") = std::numeric_limits<double>::infinity(),
-      py::arg("cross_check") = false,
-      "imumatch's exhaustive matcher (every pair of descriptors), with Lowe's ratio test.");
+      py::arg("cross_check") = false, py::arg("kernel") = "auto",
+      "imumatch's exhaustive matcher (every pair of descriptors), with Lowe's ratio test. kernel: "
+      "'auto' (the fastest this CPU runs), 'scalar', 'popcnt', 'avx2' or 'avx512' (same results).");
   m.def(
       "match_opencv_knn_ratio",
       [](const py::handle& descriptors_a, const py::handle& descriptors_b, double ratio) {

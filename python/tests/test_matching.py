@@ -128,6 +128,15 @@ def test_feature_kinds_and_zero_copy_descriptors():
     opts.max_keypoints = 200
     kps, _ = imumatch.extract_features(gray, options=opts)
     assert len(kps) <= 200
+    # Every brute-force path this CPU runs gives the same matches.
+    _, d2 = imumatch.extract_features(gray, "sift", 300)
+    for desc in (d1 := imumatch.extract_features(gray, "orb", 500)[1], d2):
+        ref = imumatch.match_brute_force(desc, desc[::-1].copy(), kernel="scalar")
+        for k in imumatch.brute_force_kernels():
+            got = imumatch.match_brute_force(desc, desc[::-1].copy(), kernel=k)
+            assert (got.train_idx == ref.train_idx).all() and (got.distance == ref.distance).all()
+    with pytest.raises(ValueError):
+        imumatch.match_brute_force(d1, d1, kernel="avx1024")
     # Own brute force and OpenCV's agree on most matches of the same descriptors.
     _, d1 = imumatch.extract_features(gray, "orb", 500)
     own = imumatch.match_brute_force(d1, d1, ratio=1.0)
