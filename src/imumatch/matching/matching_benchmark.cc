@@ -170,27 +170,15 @@ void BM_CvKnnRatio(benchmark::State& state) {
   SetCounters(state, s, matches);
 }
 
-void BM_OwnBruteForceRatio(benchmark::State& state) {
+// Own brute force + ratio on one instruction-set path (kAuto: the fastest this CPU runs).
+void RunOwnBruteForce(benchmark::State& state, BruteForceKernel kernel) {
   const FeatureSet& s = GetFeatures(static_cast<int>(state.range(0)), state.range(1));
   BruteForceOptions options;
   options.ratio = 0.8;
-  size_t matches = 0;
-  for (auto _ : state) {
-    std::vector<Match> m = MatchBruteForce(s.desc_a, s.desc_b, options);
-    matches = m.size();
-    benchmark::DoNotOptimize(m.data());
-  }
-  SetCounters(state, s, matches);
-}
-
-// Own brute force + ratio on one forced instruction-set path (range 2: BruteForceKernel).
-void BM_OwnBruteForceKernel(benchmark::State& state) {
-  const FeatureSet& s = GetFeatures(static_cast<int>(state.range(0)), state.range(1));
-  BruteForceOptions options;
-  options.ratio = 0.8;
-  options.kernel = static_cast<BruteForceKernel>(state.range(2));
+  options.kernel = kernel;
   const auto available = AvailableBruteForceKernels();
-  if (std::find(available.begin(), available.end(), options.kernel) == available.end()) {
+  if (kernel != BruteForceKernel::kAuto &&
+      std::find(available.begin(), available.end(), kernel) == available.end()) {
     state.SkipWithError("path not available on this CPU");
     return;
   }
@@ -201,6 +189,15 @@ void BM_OwnBruteForceKernel(benchmark::State& state) {
     benchmark::DoNotOptimize(m.data());
   }
   SetCounters(state, s, matches);
+}
+
+void BM_OwnBruteForceRatio(benchmark::State& state) {
+  RunOwnBruteForce(state, BruteForceKernel::kAuto);
+}
+
+// range 2: the BruteForceKernel forced.
+void BM_OwnBruteForceKernel(benchmark::State& state) {
+  RunOwnBruteForce(state, static_cast<BruteForceKernel>(state.range(2)));
 }
 
 void KernelSizes(benchmark::internal::Benchmark* b) {
