@@ -238,7 +238,7 @@ void ComputeLayer(const IntegralImage& ii, ResponseLayer* layer) {
         const float fxx = static_cast<float>(dxx) * inv_lobe_area;
         const float fyy = static_cast<float>(dyy) * inv_lobe_area;
         const float fxy = static_cast<float>(dxy) * inv_square_area;
-        out[c] = fxx * fyy - 0.81f * fxy * fxy;
+        out[c] = Determinant({fxx, fyy, fxy});
       }
     }
   });

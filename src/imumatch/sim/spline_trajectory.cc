@@ -99,8 +99,32 @@ SplineTrajectory::SplineTrajectory(const std::vector<StampedPose>& poses,
       for (int c = 0; c < 3; ++c) triplets.emplace_back(j + r, j + c, lambda * diff[r] * diff[c]);
     }
   }
-  // A tiny ridge keeps the system definite when knots have no samples and smoothing is 0.
-  for (int j = 0; j < n; ++j) triplets.emplace_back(j, j, 1e-12);
+  // A tiny ridge keeps the system definite when knots have no samples and smoothing is 0. It
+  // pulls each control point toward the poses' linear interpolation at its knot, not toward zero:
+  // across a gap of many knots the second-difference penalty weakens as (1/gap)^4 and a ridge
+  // toward zero made the fit sag there (poses at rest 10 s apart came out 6 m off, mid-gap).
+  constexpr double kRidge = 1e-12;
+  std::vector<double> pose_s(static_cast<size_t>(m));
+  for (int i = 0; i < m; ++i)
+    pose_s[static_cast<size_t>(i)] = TimeOf(poses[i].t_ns) / knot_spacing_;
+  for (int j = 0; j < n; ++j) {
+    triplets.emplace_back(j, j, kRidge);
+    // Control point j weighs most at knot j - 1.
+    const double s =
+        std::clamp(static_cast<double>(j - 1), 0.0, static_cast<double>(num_segments_));
+    const size_t hi =
+        static_cast<size_t>(std::upper_bound(pose_s.begin(), pose_s.end(), s) - pose_s.begin());
+    Eigen::Matrix<double, 1, 7> prior;
+    if (hi == 0) {
+      prior = y.row(0);
+    } else if (hi >= pose_s.size()) {
+      prior = y.row(m - 1);
+    } else {
+      const double w = (s - pose_s[hi - 1]) / (pose_s[hi] - pose_s[hi - 1]);
+      prior = (1.0 - w) * y.row(static_cast<int>(hi) - 1) + w * y.row(static_cast<int>(hi));
+    }
+    rhs.row(j) += kRidge * prior;
+  }
   Eigen::SparseMatrix<double> normal(n, n);
   normal.setFromTriplets(triplets.begin(), triplets.end());
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);

@@ -128,6 +128,24 @@ TEST(SplineTrajectoryTest, SmoothsNoisyGroundTruth) {
   EXPECT_LT(e.omega, 0.1);
 }
 
+TEST(SplineTrajectoryTest, SparsePosesDoNotSagBetweenThem) {
+  // A body at rest at x = 10 m, its pose known every 10 s (200 knots apart; found by fuzzing the
+  // TUM reader: the fit sank toward zero mid-gap and the simulated IMU saw motion, or NaN).
+  std::vector<StampedPose> poses;
+  for (int i = 0; i < 5; ++i) {
+    StampedPose p;
+    p.t_ns = int64_t{10'000'000'000} * i;
+    p.world_from_body.translation = Eigen::Vector3d(10.0, 0.0, 0.0);
+    poses.push_back(p);
+  }
+  const SplineTrajectory spline(poses);
+  for (double t : {5.0, 15.0, 25.0, 35.0}) {
+    EXPECT_NEAR(spline.WorldFromBody(t).translation.x(), 10.0, 1e-6) << t;
+    EXPECT_NEAR(spline.VelocityInWorld(t).norm(), 0.0, 1e-6) << t;
+    EXPECT_NEAR(spline.AngularVelocityInBody(t).norm(), 0.0, 1e-6) << t;
+  }
+}
+
 TEST(SplineTrajectoryTest, RejectsBadInput) {
   const auto truth = MakeMotion("front1m", MotionOptions());
   std::vector<StampedPose> poses = Sample(*truth, 100.0);
