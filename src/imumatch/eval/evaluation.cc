@@ -184,10 +184,14 @@ std::vector<std::string> CheckInputsLookRight(const std::vector<DetectorPairReco
       if (m.kind != ResidualKind::kUnjudgeable) residuals.push_back(m.residual_px);
     }
   }
-  auto median = [](auto v) {
+  // Medians in place (the vectors are local copies); -1 when empty.
+  auto median = [](auto& v) {
+    if (v.empty()) return -1.0;
     std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
     return static_cast<double>(v[v.size() / 2]);
   };
+  const double median_residual = residuals.size() >= 20 ? median(residuals) : -1.0;
+  const double median_rotation_error = median(rotation_errors);
   std::ostringstream msg;
   msg << std::fixed << std::setprecision(2);
   if (pairs_with_depth > 0 && keypoints_with_depth == 0) {
@@ -201,9 +205,9 @@ std::vector<std::string> CheckInputsLookRight(const std::vector<DetectorPairReco
   // the ground truth places most of them within the keypoints' localisation noise (~1 px; TUM's
   // motion-capture ground truth: 2 px). A median far beyond is a ground truth that does not
   // describe these images.
-  if (residuals.size() >= 20 && median(residuals) > kMaxPlausibleMedianResidualPx) {
+  if (median_residual > kMaxPlausibleMedianResidualPx) {
     msg << "the ground truth disagrees with the images: brute-force matches lie a median "
-        << median(residuals) << " px from where it puts them (expected about 1-2 px); "
+        << median_residual << " px from where it puts them (expected about 1-2 px); "
         << "timestamps shifted, another camera, or a quaternion in another order?";
     warnings.push_back(msg.str());
     msg.str("");
@@ -211,11 +215,10 @@ std::vector<std::string> CheckInputsLookRight(const std::vector<DetectorPairReco
   // A recorded IMU integrates between frames to within a few thousandths of a degree of the
   // ground truth (EuRoC MH_05: median 0.005 deg); half a degree per frame interval is a ground
   // truth or an IMU log that do not belong together.
-  if (recorded_imu && !rotation_errors.empty() &&
-      median(rotation_errors) > kMaxPlausibleImuRotationErrorDeg) {
+  if (recorded_imu && median_rotation_error > kMaxPlausibleImuRotationErrorDeg) {
     msg << "the IMU disagrees with the ground truth: the rotation it integrates between frames is "
            "a median "
-        << median(rotation_errors) << " deg off (expected < 0.05 deg); time offset, another "
+        << median_rotation_error << " deg off (expected < 0.05 deg); time offset, another "
         << "IMU, or the ground truth in another frame?";
     warnings.push_back(msg.str());
   }
