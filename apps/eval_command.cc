@@ -128,12 +128,10 @@ EvaluationOptions MakeOptions(const CommonArgs& a) {
   for (const auto& d : SplitList(a.detectors)) o.detectors.push_back(ParseDetectorKind(d));
   o.methods.clear();
   for (const auto& m : SplitList(a.methods)) o.methods.push_back(ParseMatchMethod(m));
-  IMUMATCH_CHECK(a.max_keypoints >= 1, "--max-keypoints must be >= 1");
   o.features.max_keypoints = a.max_keypoints;
   o.motion.mode = ParseIntegrationMode(a.imu_mode);
   o.motion_source = ParseMotionSource(a.motion_source);
   o.seed = a.seed;
-  IMUMATCH_CHECK(a.images >= 0, "--images must be >= 0");
   o.keep_visuals = a.images;
   IMUMATCH_CHECK(std::isfinite(a.threshold) && a.threshold >= 0.0,
                  "--threshold must be a finite number of pixels > 0, got " << a.threshold);
@@ -218,14 +216,11 @@ void RunEval(const std::string& path, CommonArgs a, double interval_s, int step,
       a.threshold > 0.0 ? std::optional<double>(a.threshold) : std::nullopt;
   EvalSource source;
   std::vector<std::string> notes;
-  if (IsPosePairFolder(path)) {
-    source = MakeDiskSource(LoadPosePairFolder(path));
-  } else {
-    DatasetOptions dopts;
-    dopts.imu_model = a.imu_model;
-    dopts.imu_seed = a.seed;
-    source = MakeDiskSource(LoadDataset(path, dopts));
-  }
+  DatasetOptions dopts;
+  dopts.imu_model = a.imu_model;
+  dopts.imu_seed = a.seed;
+  source = MakeDiskSource(LoadDatasetOrPosePair(path, dopts));
+
   if (o.motion_source == MotionSource::kImu && source.dataset.imu.empty()) {
     notes.push_back(
         "the dataset has no IMU data: using the ground-truth motion (--motion-source gt)");

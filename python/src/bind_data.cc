@@ -201,8 +201,7 @@ Timestamps are int64 nanoseconds. Load with imumatch.load_dataset.)")
         o.max_frames = max_frames;
         o.Check();
         py::gil_scoped_release release;
-        if (IsPosePairFolder(path)) return LoadPosePairFolder(path);
-        return LoadDataset(path, o);
+        return LoadDatasetOrPosePair(path, o);
       },
       py::arg("path"), py::arg("imu_model") = "euroc", py::arg("imu_seed") = 42,
       py::arg("first_frame") = 0, py::arg("max_frames") = 0,
@@ -293,15 +292,10 @@ truth is exact. Rendering costs ~0.1 s per 640 x 480 frame.)");
         } else if (py::isinstance<Dataset>(dataset)) {
           source = MakeDiskSource(dataset.cast<Dataset>());
         } else {
-          const std::string path = dataset.cast<std::string>();
-          if (IsPosePairFolder(path)) {
-            source = MakeDiskSource(LoadPosePairFolder(path));
-          } else {
-            DatasetOptions dopts;
-            dopts.imu_model = imu_model;
-            dopts.imu_seed = seed;
-            source = MakeDiskSource(LoadDataset(path, dopts));
-          }
+          DatasetOptions dopts;
+          dopts.imu_model = imu_model;
+          dopts.imu_seed = seed;
+          source = MakeDiskSource(LoadDatasetOrPosePair(dataset.cast<std::string>(), dopts));
         }
         return Evaluate(std::move(source), detectors, methods, max_pairs, step, interval_s,
                         motion_source, max_keypoints, threshold_px, refine, seed, details);

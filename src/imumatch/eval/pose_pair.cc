@@ -47,4 +47,8 @@ Dataset LoadPosePairFolder(const std::string& dir, const PinholeCamera& camera,
   return d;
 }
 
+Dataset LoadDatasetOrPosePair(const std::string& path, const DatasetOptions& options) {
+  return IsPosePairFolder(path) ? LoadPosePairFolder(path) : LoadDataset(path, options);
+}
+
 }  // namespace imumatch

@@ -20,4 +20,9 @@ Dataset LoadPosePairFolder(const std::string& dir,
                            const PinholeCamera& camera = PinholeCamera::KinectDefault(),
                            int64_t frame_interval_ns = 33'333'333);
 
+// What `eval` reads from a path: a two-frame pose-pair folder, or any layout LoadDataset knows
+// (options apply to the latter).
+Dataset LoadDatasetOrPosePair(const std::string& path,
+                              const DatasetOptions& options = DatasetOptions());
+
 }  // namespace imumatch
