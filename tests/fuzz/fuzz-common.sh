@@ -175,7 +175,7 @@ fuzz_run() {
     FUZZ_RESULT=ok
   elif grep -q 'ERROR: libFuzzer: timeout' "$log"; then
     FUZZ_RESULT=timeout
-  elif grep -qE 'ERROR: libFuzzer: out-of-memory|ERROR: libFuzzer: out-of-memory \(malloc' "$log"; then
+  elif grep -q 'ERROR: libFuzzer: out-of-memory' "$log"; then
     FUZZ_RESULT=oom
   elif grep -q 'ERROR: LeakSanitizer' "$log"; then
     FUZZ_RESULT=leak

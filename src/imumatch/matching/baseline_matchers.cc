@@ -519,7 +519,10 @@ void NearestTwo(const DescriptorView& a, const DescriptorView& b, BruteForceKern
                 Nearest2& out) {
   out.Reset(a.rows);
   if (a.rows == 0 || b.rows == 0) return;
-  if (kernel == BruteForceKernel::kAuto) kernel = AvailableBruteForceKernels().back();
+  if (kernel == BruteForceKernel::kAuto) {
+    static const BruteForceKernel fastest = AvailableBruteForceKernels().back();  // CPU: fixed
+    kernel = fastest;
+  }
   IMUMATCH_CHECK(CpuHas(kernel),
                  "this CPU cannot run the " << ToString(kernel) << " brute-force path");
   if (a.norm == DescriptorNorm::kHamming) {
