@@ -1,5 +1,6 @@
 #include "imumatch/io/image_io.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -7,6 +8,7 @@
 #include <limits>
 #include <optional>
 #include <sstream>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -46,11 +48,8 @@ std::string DepthText(int depth) {
 // The size an image file claims in its header, read before decoding so that a few bytes cannot
 // make the decoder allocate gigabytes. PNG, JPEG, BMP and PNM (PGM/PPM) are read; any other
 // format is refused (InputError), since its size could not be checked first.
-std::pair<int64_t, int64_t> HeaderSize(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::string head(65536, '\0');
-  in.read(head.data(), static_cast<std::streamsize>(head.size()));
-  head.resize(static_cast<size_t>(in.gcount()));
+std::pair<int64_t, int64_t> HeaderSize(const std::string& bytes, const std::string& path) {
+  const std::string_view head(bytes.data(), std::min<size_t>(bytes.size(), 65536));
   auto byte = [&](size_t i) { return static_cast<uint32_t>(static_cast<unsigned char>(head[i])); };
   auto be32 = [&](size_t i) {
     return byte(i) << 24 | byte(i + 1) << 16 | byte(i + 2) << 8 | byte(i + 3);
@@ -79,7 +78,7 @@ std::pair<int64_t, int64_t> HeaderSize(const std::string& path) {
     return {w, h < 0 ? -h : h};
   }
   if (head.size() >= 3 && head[0] == 'P' && head[1] >= '1' && head[1] <= '6') {  // PNM
-    std::istringstream text(head.substr(2));
+    std::istringstream text(std::string(head.substr(2)));
     int64_t w = 0, h = 0;
     std::string token;
     std::vector<int64_t> v;
@@ -112,11 +111,23 @@ cv::Mat ReadChecked(const std::string& path, int flags) {
   if (fs::is_directory(path, ec)) throw InputError(path, "is a folder, not an image file");
   const auto bytes = fs::file_size(path, ec);
   if (!ec && bytes == 0) throw InputError(path, "image file is empty (0 bytes)");
-  const auto [width, height] = HeaderSize(path);
+  // Read once: the header's size is checked on the same bytes that are then decoded.
+  std::string file;
+  {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(path, "cannot open image file");
+    std::ostringstream buffer;
+    buffer << in.rdbuf();
+    file = buffer.str();
+  }
+  if (file.size() > static_cast<size_t>(std::numeric_limits<int>::max())) {
+    throw InputError(path, "image file larger than 2 GiB");
+  }
+  const auto [width, height] = HeaderSize(file, path);
   plausibility::CheckImageSize(width, height, path);
   cv::Mat image;
   try {
-    image = cv::imread(path, flags);
+    image = cv::imdecode(cv::Mat(1, static_cast<int>(file.size()), CV_8UC1, file.data()), flags);
   } catch (const cv::Exception& e) {
     throw InputError(path, std::string("cannot decode image: ") + e.what());
   }
