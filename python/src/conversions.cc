@@ -1,6 +1,8 @@
 #include "conversions.h"
 
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "imumatch/core/error.h"
 
@@ -8,16 +10,28 @@ namespace imumatch::python {
 
 namespace {
 
+// The element types both sides know, as (OpenCV depth, NumPy dtype) pairs: the one table both
+// directions read.
+std::vector<std::pair<int, py::dtype>> ElementTypes() {
+  return {{CV_8U, py::dtype::of<uint8_t>()},  {CV_16U, py::dtype::of<uint16_t>()},
+          {CV_16S, py::dtype::of<int16_t>()}, {CV_32S, py::dtype::of<int32_t>()},
+          {CV_32F, py::dtype::of<float>()},   {CV_64F, py::dtype::of<double>()}};
+}
+
 int DepthOf(const py::dtype& dtype, const char* what) {
-  if (dtype.is(py::dtype::of<uint8_t>())) return CV_8U;
-  if (dtype.is(py::dtype::of<uint16_t>())) return CV_16U;
-  if (dtype.is(py::dtype::of<int16_t>())) return CV_16S;
-  if (dtype.is(py::dtype::of<int32_t>())) return CV_32S;
-  if (dtype.is(py::dtype::of<float>())) return CV_32F;
-  if (dtype.is(py::dtype::of<double>())) return CV_64F;
+  for (const auto& [depth, type] : ElementTypes()) {
+    if (dtype.is(type)) return depth;
+  }
   throw InvalidArgument(std::string(what) + ": unsupported dtype " +
                         py::str(static_cast<py::object>(dtype)).cast<std::string>() +
                         " (uint8, uint16, int16, int32, float32 or float64)");
+}
+
+py::dtype DtypeOf(int depth) {
+  for (const auto& [d, type] : ElementTypes()) {
+    if (d == depth) return type;
+  }
+  throw InvalidArgument("matrix of unsupported OpenCV depth " + std::to_string(depth));
 }
 
 }  // namespace
@@ -32,45 +46,20 @@ MatView ArrayToMat(const py::handle& object, const char* what) {
   const py::array& a = view.array;
   const int depth = DepthOf(a.dtype(), what);
   if (a.size() == 0) return view;
-  if (a.ndim() == 2) {
-    view.mat = cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)),
-                       CV_MAKETYPE(depth, 1), const_cast<void*>(a.data()));
-  } else if (a.ndim() == 3 && a.shape(2) >= 1 && a.shape(2) <= 4) {
-    view.mat =
-        cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)),
-                CV_MAKETYPE(depth, static_cast<int>(a.shape(2))), const_cast<void*>(a.data()));
-  } else {
+  const bool with_channels = a.ndim() == 3 && a.shape(2) >= 1 && a.shape(2) <= 4;
+  if (a.ndim() != 2 && !with_channels) {
     throw InvalidArgument(std::string(what) +
                           ": expected a 2-D array (or H x W x C, C <= 4), got " +
                           std::to_string(a.ndim()) + " dimensions");
   }
+  const int channels = with_channels ? static_cast<int>(a.shape(2)) : 1;
+  view.mat = cv::Mat(static_cast<int>(a.shape(0)), static_cast<int>(a.shape(1)),
+                     CV_MAKETYPE(depth, channels), const_cast<void*>(a.data()));
   return view;
 }
 
 py::array MatToArray(cv::Mat mat) {
-  py::dtype dtype;
-  switch (mat.depth()) {
-    case CV_8U:
-      dtype = py::dtype::of<uint8_t>();
-      break;
-    case CV_16U:
-      dtype = py::dtype::of<uint16_t>();
-      break;
-    case CV_16S:
-      dtype = py::dtype::of<int16_t>();
-      break;
-    case CV_32S:
-      dtype = py::dtype::of<int32_t>();
-      break;
-    case CV_32F:
-      dtype = py::dtype::of<float>();
-      break;
-    case CV_64F:
-      dtype = py::dtype::of<double>();
-      break;
-    default:
-      throw InvalidArgument("matrix of unsupported OpenCV depth " + std::to_string(mat.depth()));
-  }
+  const py::dtype dtype = DtypeOf(mat.depth());
   if (mat.empty()) {
     return py::array(dtype, std::vector<py::ssize_t>{0, std::max(0, mat.cols)});
   }
