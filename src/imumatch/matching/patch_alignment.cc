@@ -1,0 +1,199 @@
+#include "imumatch/matching/patch_alignment.h"
+
+#include <cmath>
+#include <limits>
+
+namespace imumatch {
+namespace {
+
+// Bilinear sample of an 8-bit image at a point known to lie inside [0, cols-1) x [0, rows-1).
+inline float SampleUnchecked(const uint8_t* data, size_t step, float x, float y) {
+  const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
+  const float fx = x - static_cast<float>(x0), fy = y - static_cast<float>(y0);
+  const uint8_t* r0 = data + static_cast<size_t>(y0) * step + x0;
+  const uint8_t* r1 = r0 + step;
+  const float top = r0[0] + fx * (static_cast<float>(r0[1]) - r0[0]);
+  const float bottom = r1[0] + fx * (static_cast<float>(r1[1]) - r1[0]);
+  return top + fy * (bottom - top);
+}
+
+// Samples the w x h grid of unit steps whose first sample is at (x, y) (bilinear, one set of
+// weights for all samples), row-major into out. The grid must lie inside the image.
+inline void SampleGrid(const uint8_t* data, size_t step, float x, float y, int w, int h,
+                       float* out) {
+  const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
+  const float fx = x - static_cast<float>(x0), fy = y - static_cast<float>(y0);
+  const float w00 = (1.0f - fx) * (1.0f - fy), w01 = fx * (1.0f - fy);
+  const float w10 = (1.0f - fx) * fy, w11 = fx * fy;
+  for (int r = 0; r < h; ++r) {
+    const uint8_t* p = data + static_cast<size_t>(y0 + r) * step + x0;
+    const uint8_t* q = p + step;
+    float* o = out + static_cast<size_t>(r) * w;
+    for (int c = 0; c < w; ++c) {
+      o[c] = w00 * p[c] + w01 * p[c + 1] + w10 * q[c] + w11 * q[c + 1];
+    }
+  }
+}
+
+}  // namespace
+
+PatchTemplate::PatchTemplate(int max_half_size) : max_half_(max_half_size) {
+  const size_t ext = static_cast<size_t>(2 * max_half_size + 3);
+  const size_t side = ext - 2;
+  ring_.resize(ext * ext);
+  t_.resize(side * side);
+  gx_.resize(side * side);
+  gy_.resize(side * side);
+  target_.resize(side * side);
+}
+
+AlignStatus PatchTemplate::Build(const cv::Mat& gray_a, const Eigen::Vector2f& ka,
+                                 const Eigen::Matrix2f& inv, int h, float min_texture) {
+  h_ = h < 1 ? 1 : (h > max_half_ ? max_half_ : h);
+  const int side = 2 * h_ + 1, ext = side + 2;
+  const size_t n = static_cast<size_t>(side) * side;
+  const float inv_n = 1.0f / static_cast<float>(n);
+  const uint8_t* data_a = gray_a.ptr<uint8_t>();
+  const size_t step_a = gray_a.step[0];
+  const float reach = static_cast<float>(h_ + 1);
+  float* ring = ring_.data();
+  // A warp that moves no template sample by more than 0.05 px is the identity: A's patch is
+  // then read on a grid too.
+  const bool identity =
+      (inv - Eigen::Matrix2f::Identity()).cwiseAbs().maxCoeff() * static_cast<float>(2 * h_) <
+      0.05f;
+  const float reach_a = reach * inv.cwiseAbs().rowwise().sum().maxCoeff();
+  if (!(reach_a < 1e6f) ||
+      !BoxInside(gray_a, ka.x(), ka.y(), -reach_a, reach_a, -reach_a, reach_a)) {
+    return AlignStatus::kBorder;
+  }
+  if (identity) {
+    SampleGrid(data_a, step_a, ka.x() - reach, ka.y() - reach, ext, ext, ring);
+  } else {
+    for (int r = 0; r < ext; ++r) {
+      const float qy = static_cast<float>(r - h_ - 1);
+      for (int c = 0; c < ext; ++c) {
+        const float qx = static_cast<float>(c - h_ - 1);
+        ring[static_cast<size_t>(r) * ext + c] =
+            SampleUnchecked(data_a, step_a, ka.x() + inv(0, 0) * qx + inv(0, 1) * qy,
+                            ka.y() + inv(1, 0) * qx + inv(1, 1) * qy);
+      }
+    }
+  }
+  // Normalised template statistics and its gradients (central differences, B's pixels).
+  float sum = 0.0f, sum2 = 0.0f;
+  for (int r = 1; r <= side; ++r) {
+    for (int c = 1; c <= side; ++c) {
+      const float v = ring[static_cast<size_t>(r) * ext + c];
+      sum += v;
+      sum2 += v * v;
+    }
+  }
+  const float mean_t = sum * inv_n;
+  const float var_t = sum2 * inv_n - mean_t * mean_t;
+  if (!(var_t > 1e-6f)) return AlignStatus::kTexture;
+  const float inv_sd_t = 1.0f / std::sqrt(var_t);
+  h00_ = h01_ = h11_ = gsum_x_ = gsum_y_ = gt_x_ = gt_y_ = 0.0f;
+  for (int r = 0; r < side; ++r) {
+    for (int c = 0; c < side; ++c) {
+      const size_t e = static_cast<size_t>(r + 1) * ext + c + 1;
+      const size_t k = static_cast<size_t>(r) * side + c;
+      const float t = (ring[e] - mean_t) * inv_sd_t;
+      const float dx = 0.5f * inv_sd_t * (ring[e + 1] - ring[e - 1]);
+      const float dy = 0.5f * inv_sd_t * (ring[e + ext] - ring[e - ext]);
+      t_[k] = t;
+      gx_[k] = dx;
+      gy_[k] = dy;
+      h00_ += dx * dx;
+      h01_ += dx * dy;
+      h11_ += dy * dy;
+      gsum_x_ += dx;
+      gsum_y_ += dy;
+      gt_x_ += dx * t;
+      gt_y_ += dy * t;
+    }
+  }
+  // Texture in both directions: the smaller eigenvalue of the Hessian per sample.
+  const float a00 = h00_ * inv_n, a01 = h01_ * inv_n, a11 = h11_ * inv_n;
+  const float min_eig =
+      0.5f * (a00 + a11 - std::sqrt((a00 - a11) * (a00 - a11) + 4.0f * a01 * a01));
+  if (!(min_eig >= min_texture)) return AlignStatus::kTexture;
+  return AlignStatus::kAligned;
+}
+
+AlignStatus PatchTemplate::Align(const cv::Mat& gray_b, const Eigen::Vector2f& start,
+                                 const PatchAlignOptions& options, Eigen::Vector2f* xy,
+                                 int64_t* iterations) {
+  const int h = h_, side = 2 * h + 1;
+  const size_t n = static_cast<size_t>(side) * side;
+  const float inv_n = 1.0f / static_cast<float>(n);
+  const uint8_t* data_b = gray_b.ptr<uint8_t>();
+  const size_t step_b = gray_b.step[0];
+  const float conv2 = options.convergence_px * options.convergence_px;
+  const float slow2 = 25.0f * conv2;
+  const float hf = static_cast<float>(h);
+  const float det = h00_ * h11_ - h01_ * h01_;
+  const float i00 = h11_ / det, i01 = -h01_ / det, i11 = h00_ / det;
+  const float* gx = gx_.data();
+  const float* gy = gy_.data();
+  float* target = target_.data();
+  float x = start.x(), y = start.y();
+  bool converged = false;
+  float last_move2 = std::numeric_limits<float>::infinity();
+  for (int it = 0; it < options.max_iterations; ++it) {
+    ++*iterations;
+    if (!BoxInside(gray_b, x, y, -hf, hf, -hf, hf)) return AlignStatus::kBorder;
+    SampleGrid(data_b, step_b, x - hf, y - hf, side, side, target);
+    float s1 = 0.0f, s2 = 0.0f, sgx = 0.0f, sgy = 0.0f;
+    for (size_t k = 0; k < n; ++k) {
+      const float v = target[k];
+      s1 += v;
+      s2 += v * v;
+      sgx += gx[k] * v;
+      sgy += gy[k] * v;
+    }
+    const float mean_i = s1 * inv_n;
+    const float var_i = s2 * inv_n - mean_i * mean_i;
+    if (!(var_i > 1e-6f)) return AlignStatus::kBorder;
+    const float inv_sd_i = 1.0f / std::sqrt(var_i);
+    const float bx = (sgx - mean_i * gsum_x_) * inv_sd_i - gt_x_;
+    const float by = (sgy - mean_i * gsum_y_) * inv_sd_i - gt_y_;
+    const float mx = i00 * bx + i01 * by, my = i01 * bx + i11 * by;
+    x -= mx;
+    y -= my;
+    if (!std::isfinite(x) || !std::isfinite(y)) return AlignStatus::kBorder;
+    last_move2 = mx * mx + my * my;
+    if (last_move2 < conv2) {
+      converged = true;
+      break;
+    }
+  }
+  *xy = Eigen::Vector2f(x, y);
+  // Slow convergence (a last step under 5x the tolerance) still counts: the estimate is good to
+  // a few hundredths of a pixel.
+  if (!converged && !(last_move2 < slow2)) return AlignStatus::kNoConvergence;
+  return AlignStatus::kAligned;
+}
+
+float PatchTemplate::Correlation(const cv::Mat& gray_b, const Eigen::Vector2f& xy) {
+  const int side = 2 * h_ + 1;
+  const float hf = static_cast<float>(h_);
+  if (!xy.allFinite() || !BoxInside(gray_b, xy.x(), xy.y(), -hf, hf, -hf, hf)) return -2.0f;
+  const size_t n = static_cast<size_t>(side) * side;
+  float* target = target_.data();
+  SampleGrid(gray_b.ptr<uint8_t>(), gray_b.step[0], xy.x() - hf, xy.y() - hf, side, side, target);
+  float s1 = 0.0f, s2 = 0.0f, st = 0.0f;
+  for (size_t k = 0; k < n; ++k) {
+    s1 += target[k];
+    s2 += target[k] * target[k];
+    st += t_[k] * target[k];
+  }
+  const float inv_n = 1.0f / static_cast<float>(n);
+  const float mean = s1 * inv_n;
+  const float var = s2 * inv_n - mean * mean;
+  if (!(var > 1e-6f)) return -2.0f;
+  // sum_k T_k (I_k - mean) / (n sd): T has zero mean and unit variance.
+  return st * inv_n / std::sqrt(var);
+}
+
+}  // namespace imumatch
