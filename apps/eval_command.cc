@@ -57,6 +57,7 @@ struct CommonArgs {
   double still_s = 1.0;
   std::string sigma_scaling = "size";
   bool overwrite = false;
+  double gain_b = 1.0;
 };
 
 void AddCommonOptions(CLI::App* cmd, CommonArgs& a) {
@@ -64,7 +65,8 @@ void AddCommonOptions(CLI::App* cmd, CommonArgs& a) {
                 "write into an --out folder that holds files imumatch did not write");
   cmd->add_option("--detectors", a.detectors, "comma-separated: sift,surf,orb,fast,akaze,brisk")
       ->capture_default_str();
-  cmd->add_option("--methods", a.methods, "comma-separated: bf,guided,fixed10,bf_own")
+  cmd->add_option("--methods", a.methods,
+                  "comma-separated: bf,guided,fixed10,bf_own,klt0,klt,hybrid")
       ->capture_default_str();
   cmd->add_option("--max-keypoints", a.max_keypoints, "keypoints per frame and detector")
       ->capture_default_str()
@@ -107,6 +109,10 @@ void AddCommonOptions(CLI::App* cmd, CommonArgs& a) {
                   "orientation check)");
   cmd->add_flag("--no-refine", a.no_refine,
                 "guided: do not refine matched positions to sub-pixel accuracy");
+  cmd->add_option("--gain-b", a.gain_b,
+                  "exposure change: multiply frame B of every pair by this gain (1 = off)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.01, 100.0));
   cmd->add_option("--still", a.still_s,
                   "recorded IMU: seconds of still start used to estimate the gyro bias (0 = none)")
       ->capture_default_str();
@@ -153,6 +159,7 @@ EvaluationOptions MakeOptions(const CommonArgs& a) {
     throw InvalidArgument("--sigma-scaling must be size or none, got '" + a.sigma_scaling + "'");
   }
   o.still_init_s = a.still_s;
+  o.gain_b = a.gain_b;
   o.Check();
   return o;
 }

@@ -31,6 +31,7 @@ struct SynthArgs {
   double still_s = -1.0;
   double t0_s = 0.0;
   double texel_m = 0.005;
+  double gain = 1.0;
   bool overwrite = false;
 };
 
@@ -54,6 +55,7 @@ void RunSynth(const SynthArgs& a) {
   options.render.depth_noise.add_noise = a.depth_noise;
   options.render.depth_noise.add_holes = a.depth_holes;
   options.render.depth_noise.seed = a.seed;
+  options.odd_frame_gain = a.gain;
   if (a.duration_s >= 0.0) options.motion_options.duration_s = a.duration_s;
   if (a.still_s >= 0.0) {
     options.motion_options.still_before_s = a.still_s;
@@ -108,6 +110,10 @@ void AddSynthCommand(CLI::App& app) {
   sub->add_option("--t0", args->t0_s, "Timestamp of the start (s)")->capture_default_str();
   sub->add_option("--texel", args->texel_m, "Texture resolution of the room (m per texel)")
       ->capture_default_str();
+  sub->add_option("--gain", args->gain,
+                  "Exposure flicker: every odd frame's intensities times this gain (1 = off)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.01, 100.0));
   sub->add_flag("--overwrite", args->overwrite, "Write into a non-empty folder");
   sub->callback([args] { RunSynth(*args); });
 }

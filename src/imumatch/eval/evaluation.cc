@@ -21,6 +21,7 @@
 #include "imumatch/matching/baseline_matchers.h"
 #include "imumatch/matching/descriptor_distance.h"
 #include "imumatch/matching/grid_index.h"
+#include "imumatch/matching/klt_tracker.h"
 
 #include "imumatch/eval/pair_motion.h"
 #include "imumatch/eval/pipelined.h"
@@ -95,7 +96,17 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
   MethodRun run;
   run.method = method;
   predictions.clear();
-  if (method == MatchMethod::kBruteForce || method == MatchMethod::kOwnBruteForce) {
+  if (method == MatchMethod::kKltUnseeded) {
+    const auto t0 = Clock::now();
+    TrackResult tracks =
+        TrackOpenCvLk(image_a.image, image_b.image, fa.keypoints, options.klt_unseeded);
+    run.match_ms = MsSince(t0);
+    run.track_stats = tracks.stats;
+    run.from_tracks = static_cast<int>(tracks.tracks.size());
+    matches = std::move(tracks.tracks);
+    return run;
+  }
+  if (IsBruteForce(method)) {
     const auto t0 = Clock::now();
     if (method == MatchMethod::kBruteForce) {
       matches = MatchOpenCvKnnRatio(fa.descriptors, fb.descriptors, options.ratio);
@@ -119,6 +130,40 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
   }
   predictions = PredictKeypoints(undistorter, motion, ca.ideal, depths, popts);
   run.predict_ms = MsSince(t0) + cb.ideal_ms;
+  if (IsTracking(method)) {
+    // Frame A's pyramid would be frame B's of the previous pair in a stream: not charged.
+    const TrackingPyramid pyr_a = TrackingPyramid::Build(image_a.image, options.klt.max_level);
+    t0 = Clock::now();
+    const TrackingPyramid pyr_b = TrackingPyramid::Build(image_b.image, options.klt.max_level);
+    TrackResult tracks =
+        TrackSeeded(pyr_a, pyr_b, fa.keypoints, predictions, undistorter, options.klt);
+    run.match_ms = MsSince(t0);
+    run.track_stats = tracks.stats;
+    run.from_tracks = static_cast<int>(tracks.tracks.size());
+    matches = std::move(tracks.tracks);
+    if (method == MatchMethod::kKlt) return run;
+    // Hybrid: guided matching for the keypoints whose track failed, inside the same windows.
+    t0 = Clock::now();
+    std::vector<KeypointPrediction> rest = predictions;
+    for (size_t i = 0; i < rest.size(); ++i) {
+      if (tracks.outcomes[i] == TrackOutcome::kTracked) rest[i].status = PredictionStatus::kInvalid;
+    }
+    GridIndex grid;
+    grid.Build(cb.ideal, camera.width, camera.height,
+               static_cast<float>(options.guided.grid_cell_size));
+    MatchResult result =
+        MatchGuided(rest, ca.ideal, DescriptorView::FromMat(fa.descriptors), cb.ideal, grid,
+                    DescriptorView::FromMat(fb.descriptors), options.guided);
+    if (options.refine_subpixel) {
+      run.refine_stats = RefineMatches(image_a.image, image_b.image, fa.keypoints, fb.keypoints,
+                                       predictions, camera, options.subpixel, result.matches);
+    }
+    run.match_ms += MsSince(t0);
+    run.stats = result.stats;
+    run.from_descriptors = static_cast<int>(result.matches.size());
+    matches.insert(matches.end(), result.matches.begin(), result.matches.end());
+    return run;
+  }
   t0 = Clock::now();
   GridIndex grid;
   grid.Build(cb.ideal, camera.width, camera.height,
@@ -314,6 +359,12 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
     const CameraMotion gt =
         CameraMotionFromPoses(fa.t_ns, *fa.world_from_cam, fb.t_ns, *fb.world_from_cam);
 
+    if (options.gain_b != 1.0) {
+      // A new buffer: the reader keeps the ungained frame B as the next pair's frame A.
+      cv::Mat gained;
+      item.b.image.convertTo(gained, -1, options.gain_b);
+      item.b.image = gained;
+    }
     std::vector<CachedFeatures> next_cache;
     for (DetectorKind kind : options.detectors) {
       FeatureOptions fopts = options.features;
@@ -390,7 +441,7 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
         MethodRun run = RunMethod(method, undistorter, motion->motion, ca, cb, item.a, item.b,
                                   options, matches, predictions);
         run.residuals = judge.Judge(matches);
-        if (!UsesPrediction(method) && rec.bf_run < 0) {
+        if (IsBruteForce(method) && rec.bf_run < 0) {
           rec.bf_run = static_cast<int>(m);
           bf_matches = matches;
         }
@@ -402,7 +453,7 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
       }
       if (rec.bf_run >= 0) {
         for (size_t m = 0; m < options.methods.size(); ++m) {
-          if (UsesPrediction(options.methods[m])) {
+          if (UsesPrediction(options.methods[m]) && !IsTracking(options.methods[m])) {
             CheckWindows(bf_matches, run_predictions[m], cb.ideal, rec.runs[m]);
           }
         }
@@ -410,7 +461,12 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
       result.records.push_back(std::move(rec));
       if (keep_visual) result.visuals.push_back(std::move(visual));
     }
-    cache = std::move(next_cache);
+    // Features of a gained frame B are not those of the next pair's (ungained) frame A.
+    if (options.gain_b == 1.0) {
+      cache = std::move(next_cache);
+    } else {
+      cache.clear();
+    }
     report_progress();
   };
   RunPipelined<PairItem>(

@@ -34,6 +34,10 @@ struct MethodRun {
   double match_ms = 0.0;    // grid + matching, or brute force
   double refine_ms = 0.0;   // sub-pixel refinement (guided, when enabled)
   SubpixelStats refine_stats;
+  // Tracking methods: how every track ended; hybrid: how many correspondences each path made.
+  TrackStats track_stats;
+  int from_tracks = 0;
+  int from_descriptors = 0;
   std::vector<MatchResidual> residuals;  // one per match
   MatchStats stats;                      // guided methods: outcome of every query
   std::vector<QueryOutcome> outcomes;    // guided methods: per query

@@ -26,6 +26,12 @@ std::string ToString(MatchMethod method) {
       return "fixed10";
     case MatchMethod::kOwnBruteForce:
       return "bf_own";
+    case MatchMethod::kKltUnseeded:
+      return "klt0";
+    case MatchMethod::kKlt:
+      return "klt";
+    case MatchMethod::kHybrid:
+      return "hybrid";
   }
   return "?";
 }
@@ -40,6 +46,12 @@ std::string DisplayName(MatchMethod method) {
       return "IMU fixed +-10 px";
     case MatchMethod::kOwnBruteForce:
       return "BF ratio (imumatch)";
+    case MatchMethod::kKltUnseeded:
+      return "KLT unseeded (OpenCV)";
+    case MatchMethod::kKlt:
+      return "KLT IMU-seeded";
+    case MatchMethod::kHybrid:
+      return "Hybrid KLT + guided";
   }
   return "?";
 }
@@ -50,12 +62,35 @@ MatchMethod ParseMatchMethod(std::string_view name) {
   if (n == "guided") return MatchMethod::kGuided;
   if (n == "fixed10" || n == "fixed") return MatchMethod::kFixedWindow;
   if (n == "bf_own") return MatchMethod::kOwnBruteForce;
+  if (n == "klt0") return MatchMethod::kKltUnseeded;
+  if (n == "klt") return MatchMethod::kKlt;
+  if (n == "hybrid") return MatchMethod::kHybrid;
   throw InvalidArgument("unknown method '" + std::string(name) +
-                        "' (valid: bf, guided, fixed10, bf_own)");
+                        "' (valid: bf, guided, fixed10, bf_own, klt0, klt, hybrid)");
 }
 
 bool UsesPrediction(MatchMethod method) {
-  return method == MatchMethod::kGuided || method == MatchMethod::kFixedWindow;
+  return method == MatchMethod::kGuided || method == MatchMethod::kFixedWindow ||
+         method == MatchMethod::kKlt || method == MatchMethod::kHybrid;
+}
+
+KltOptions VinsKltOptions() {
+  KltOptions o;
+  o.half_size = 10;
+  o.max_level = 3;
+  o.warp_patch = false;
+  o.gate_by_window = false;
+  o.min_correlation = -1.0;  // VINS-Fusion checks no correlation
+  return o;
+}
+
+bool IsBruteForce(MatchMethod method) {
+  return method == MatchMethod::kBruteForce || method == MatchMethod::kOwnBruteForce;
+}
+
+bool IsTracking(MatchMethod method) {
+  return method == MatchMethod::kKltUnseeded || method == MatchMethod::kKlt ||
+         method == MatchMethod::kHybrid;
 }
 
 MotionSource ParseMotionSource(std::string_view name) {
@@ -76,6 +111,9 @@ void EvaluationOptions::Check() const {
   prediction.Check();
   guided.Check();
   subpixel.Check();
+  klt.Check();
+  klt_unseeded.Check();
+  IMUMATCH_CHECK(std::isfinite(gain_b) && gain_b > 0.0 && gain_b <= 100.0, "gain_b = " << gain_b);
   ground_truth.Check();
   IMUMATCH_CHECK(std::isfinite(still_init_s) && still_init_s >= 0.0,
                  "still_init_s = " << still_init_s);

@@ -10,6 +10,7 @@
 #include "imumatch/features/feature_factory.h"
 #include "imumatch/imu/camera_motion.h"
 #include "imumatch/matching/guided_matcher.h"
+#include "imumatch/matching/klt_tracker.h"
 #include "imumatch/matching/predictor.h"
 #include "imumatch/matching/subpixel_refinement.h"
 
@@ -20,11 +21,18 @@ enum class MatchMethod {
   kGuided,         // IMU prediction + uncertainty windows + guided matcher
   kFixedWindow,    // IMU prediction + the paper's fixed +-10 px window
   kOwnBruteForce,  // imumatch's exhaustive matcher + ratio test
+  // Tracking: correspondences from A's keypoints to tracked positions in B (no keypoint of B).
+  kKltUnseeded,  // VINS-style pyramidal LK from each keypoint's own position (OpenCV)
+  kKlt,          // LK seeded at the IMU prediction, gated by its window (TrackSeeded)
+  kHybrid,       // kKlt, and guided matching for the keypoints whose track failed
 };
-std::string ToString(MatchMethod method);     // "bf", "guided", "fixed10", "bf_own"
+// "bf", "guided", "fixed10", "bf_own", "klt0", "klt", "hybrid"
+std::string ToString(MatchMethod method);
 std::string DisplayName(MatchMethod method);  // "BF knn+ratio", "IMU-guided", ...
 MatchMethod ParseMatchMethod(std::string_view name);
-bool UsesPrediction(MatchMethod method);
+bool UsesPrediction(MatchMethod method);  // guided, fixed10, klt, hybrid
+bool IsBruteForce(MatchMethod method);    // bf, bf_own
+bool IsTracking(MatchMethod method);      // klt0, klt, hybrid
 
 enum class MotionSource {
   kImu,          // integrate the dataset's IMU samples (recorded or simulated)
@@ -32,6 +40,10 @@ enum class MotionSource {
 };
 MotionSource ParseMotionSource(std::string_view name);  // "imu" | "gt"
 const char* ToString(MotionSource source);
+
+// The unseeded baseline's settings (VINS-Fusion's feature tracker): 21 x 21 window, pyramid
+// levels 0-3, forward-backward check 0.5 px.
+KltOptions VinsKltOptions();
 
 struct EvaluationOptions {
   std::vector<DetectorKind> detectors = {DetectorKind::kSift,  DetectorKind::kSurf,
@@ -61,6 +73,13 @@ struct EvaluationOptions {
   bool refine_subpixel = true;
   SubpixelOptions subpixel;
   GroundTruthOptions ground_truth;
+  // Tracking methods: the seeded tracker (klt, hybrid) and the unseeded baseline (klt0, with
+  // VINS-Fusion's settings: 21 x 21 window, 3 levels, forward-backward <= 0.5 px).
+  KltOptions klt;
+  KltOptions klt_unseeded = VinsKltOptions();
+  // Exposure change: frame B of every pair is multiplied by this gain (saturated to 8 bits)
+  // before features are extracted and matched; 1 leaves the images as read.
+  double gain_b = 1.0;
 
   // Keep the images, keypoints, matches and predictions of the first `keep_visuals` pairs of the
   // source (for match images).

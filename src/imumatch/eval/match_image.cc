@@ -145,7 +145,11 @@ cv::Mat DrawMatchImage(const PairVisual& visual, size_t run_index,
   for (size_t i = 0; i < run.matches.size(); ++i) {
     const Match& m = run.matches[i];
     const cv::Point2f pa = visual.keypoints_a[m.query_idx].pt + off_a;
-    const cv::Point2f pb = visual.keypoints_b[m.train_idx].pt + off_b;
+    // A track (train_idx -1) and a refined match end at the refined position.
+    const cv::Point2f pb = (m.refined_uv_b.allFinite() || m.train_idx < 0
+                                ? cv::Point2f(m.refined_uv_b.x(), m.refined_uv_b.y())
+                                : visual.keypoints_b[static_cast<size_t>(m.train_idx)].pt) +
+                           off_b;
     const MatchResidual& r = run.residuals[i];
     const bool ok = r.kind != ResidualKind::kUnjudgeable && r.residual_px <= options.threshold_px;
     if (ok) {

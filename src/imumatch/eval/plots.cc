@@ -66,6 +66,12 @@ cv::Scalar MethodColor(MatchMethod method) {
       return cv::Scalar(200, 120, 30);  // blue
     case MatchMethod::kOwnBruteForce:
       return cv::Scalar(20, 140, 230);  // orange
+    case MatchMethod::kKltUnseeded:
+      return cv::Scalar(140, 140, 140);  // grey
+    case MatchMethod::kKlt:
+      return cv::Scalar(180, 60, 160);  // purple
+    case MatchMethod::kHybrid:
+      return cv::Scalar(30, 30, 30);  // black
   }
   return cv::Scalar(0, 0, 0);
 }

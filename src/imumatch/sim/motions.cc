@@ -180,6 +180,7 @@ void MotionOptions::Check() const {
   IMUMATCH_CHECK(std::isfinite(shake_scale) && shake_scale >= 0.0,
                  "MotionOptions.shake_scale must be >= 0, got " << shake_scale);
   IMUMATCH_CHECK(std::isfinite(yaw_rate_deg_s), "MotionOptions.yaw_rate_deg_s must be finite");
+  IMUMATCH_CHECK(std::isfinite(roll_rate_deg_s), "MotionOptions.roll_rate_deg_s must be finite");
   IMUMATCH_CHECK(std::isfinite(roll_amplitude_deg),
                  "MotionOptions.roll_amplitude_deg must be finite");
   IMUMATCH_CHECK(std::isfinite(walk_speed_m_s), "MotionOptions.walk_speed_m_s must be finite");
@@ -188,7 +189,7 @@ void MotionOptions::Check() const {
 }
 
 std::vector<std::string> MotionNames() {
-  return {"front1m", "back1m", "left30", "right30", "shake", "fast_rotation", "walk"};
+  return {"front1m", "back1m", "left30", "right30", "shake", "fast_rotation", "walk", "roll45"};
 }
 
 std::unique_ptr<Trajectory> MakeMotion(std::string_view name, const MotionOptions& options) {
@@ -224,6 +225,11 @@ std::unique_ptr<Trajectory> MakeMotion(std::string_view name, const MotionOption
     traj->rotvec[0] = {P::Sine(t0, t1, ramp, options.roll_amplitude_deg * kDegToRad, 1.5, 0.0)};
     traj->rotvec[1] = {P::Sine(t0, t1, ramp, 3.0 * kDegToRad, 0.8, 1.0)};
     traj->offset[1] = {P::Sine(t0, t1, ramp, 0.01, 0.9, 0.5)};
+  } else if (name == "roll45") {
+    // About the body x axis, which is the camera's optical axis: an in-plane image rotation.
+    const double ramp = std::min(0.2, 0.5 * duration);
+    const double rate = options.roll_rate_deg_s * kDegToRad;
+    traj->rotvec[0] = {P::Ramp(t0, ramp, rate), P::Ramp(t1 - ramp, ramp, -rate)};
   } else if (name == "walk") {
     const double ramp = std::min(0.6, 0.5 * duration);
     const double fade = std::min(0.4, 0.5 * duration);

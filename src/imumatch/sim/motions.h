@@ -37,6 +37,8 @@ struct MotionOptions {
   // "fast_rotation": peak yaw rate (deg/s), with a roll wobble of roll_amplitude_deg.
   double yaw_rate_deg_s = 180.0;
   double roll_amplitude_deg = 10.0;
+  // "roll45": roll rate about the optical axis (deg/s), ramped up and down over 0.2 s.
+  double roll_rate_deg_s = 45.0;
   // "walk": peak forward speed (m/s), plus step bobbing, sway and head rotation.
   double walk_speed_m_s = 0.8;
   Rigid3d world_from_body_start = SyntheticStartWorldFromBody();
@@ -47,7 +49,7 @@ struct MotionOptions {
   double MotionEndTime() const { return still_before_s + duration_s; }
 };
 
-// "front1m", "back1m", "left30", "right30", "shake", "fast_rotation", "walk".
+// "front1m", "back1m", "left30", "right30", "shake", "fast_rotation", "walk", "roll45".
 std::vector<std::string> MotionNames();
 
 // A trajectory with analytic pose, velocity, acceleration and body angular velocity, defined on
@@ -59,6 +61,8 @@ std::vector<std::string> MotionNames();
 //  origin;
 //  - shake: sums of sinusoids, about 2-3 cm in translation and 2-3 deg in rotation, faded in/out;
 //  - fast_rotation: yaw rate ramped to yaw_rate_deg_s and back, with a roll wobble;
+//  - roll45: roll about the optical axis at roll_rate_deg_s (45 deg/s), ramped over 0.2 s: the
+//    image turns in its plane;
 //  - walk: forward speed ramped to walk_speed_m_s and back, with vertical bobbing (2 Hz), lateral
 //    sway (1 Hz), and small head yaw/pitch/roll.
 std::unique_ptr<Trajectory> MakeMotion(std::string_view name, const MotionOptions& options);

@@ -30,6 +30,8 @@ void SyntheticSequenceOptions::Check() const {
   ImuParams::FromName(imu_model).Check();
   scene.Check();
   render.Check();
+  IMUMATCH_CHECK(std::isfinite(odd_frame_gain) && odd_frame_gain > 0.0 && odd_frame_gain <= 100.0,
+                 "odd_frame_gain = " << odd_frame_gain);
 }
 
 SyntheticSequence MakeSyntheticSequence(const SyntheticSequenceOptions& options) {
@@ -102,7 +104,11 @@ SyntheticSequence MakeSyntheticSequence(const Trajectory& trajectory,
     frame.imu_velocity_in_world = trajectory.VelocityInWorld(times[k]);
     render.depth_noise.seed = options.render.depth_noise.seed + k;
     RenderedView view = RenderView(scene, options.camera, frame.world_from_cam, render);
-    frame.rgb = std::move(view.rgb);
+    if (options.odd_frame_gain != 1.0 && k % 2 == 1) {
+      view.rgb.convertTo(frame.rgb, -1, options.odd_frame_gain);
+    } else {
+      frame.rgb = std::move(view.rgb);
+    }
     frame.depth = std::move(view.depth);
     seq.frames.push_back(std::move(frame));
   }

@@ -40,6 +40,9 @@ struct SyntheticSequenceOptions {
   SceneOptions scene;
   // Rendering and depth noise. Frame k uses depth_noise.seed + k, so noise differs between frames.
   RenderOptions render;
+  // Exposure flicker (auto-exposure): frames with an odd index are rendered with their intensities
+  // multiplied by this gain (saturated to 8 bits), so consecutive frames differ by it. 1 = off.
+  double odd_frame_gain = 1.0;
   void Check() const;
 };
 
