@@ -81,6 +81,7 @@ KltOptions VinsKltOptions() {
   o.warp_patch = false;
   o.gate_by_window = false;
   o.min_correlation = -1.0;  // VINS-Fusion checks no correlation
+  o.convergence_px = 0.01;   // cv::TermCriteria(COUNT + EPS, 30, 0.01)
   return o;
 }
 

@@ -236,6 +236,65 @@ std::string MarkdownThresholdTable(const std::vector<DetectorPairRecord>& record
   return out.str();
 }
 
+std::string MarkdownTrackingTable(const std::vector<DetectorPairRecord>& records) {
+  struct Acc {
+    TrackStats s;
+    int pairs = 0;
+    int64_t from_tracks = 0, from_descriptors = 0;
+  };
+  std::map<std::tuple<std::string, int, int>, Acc> acc;
+  std::vector<std::string> order;
+  for (const auto& r : records) {
+    for (const auto& run : r.runs) {
+      if (!IsTracking(run.method)) continue;
+      if (std::find(order.begin(), order.end(), r.case_name) == order.end()) {
+        order.push_back(r.case_name);
+      }
+      Acc& a = acc[{r.case_name, static_cast<int>(r.detector), static_cast<int>(run.method)}];
+      const TrackStats& t = run.track_stats;
+      a.s.queries += t.queries;
+      a.s.tracked += t.tracked;
+      a.s.no_prediction += t.no_prediction;
+      a.s.border += t.border;
+      a.s.texture += t.texture;
+      a.s.no_convergence += t.no_convergence;
+      a.s.forward_backward += t.forward_backward;
+      a.s.low_correlation += t.low_correlation;
+      a.s.outside_window += t.outside_window;
+      a.s.ambiguous += t.ambiguous;
+      a.from_tracks += run.from_tracks;
+      a.from_descriptors += run.from_descriptors;
+      ++a.pairs;
+    }
+  }
+  if (acc.empty()) return "";
+  std::ostringstream out;
+  out << "| Case | Detector | Method | queries | tracked | no prediction | border / texture | no "
+         "convergence | forward-backward | low correlation | ambiguous | outside window | "
+         "hybrid: tracks / descriptor matches "
+         "|\n|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"
+         "---:|---:|\n";
+  for (const auto& c : order) {
+    for (const auto& [key, a] : acc) {
+      if (std::get<0>(key) != c) continue;
+      const double n = a.pairs;
+      const TrackStats& t = a.s;
+      const auto m = static_cast<MatchMethod>(std::get<2>(key));
+      out << "| " << c << " | " << ToString(static_cast<DetectorKind>(std::get<1>(key))) << " | "
+          << DisplayName(m) << " | " << Fixed(t.queries / n, 1) << " | " << Fixed(t.tracked / n, 1)
+          << " | " << Fixed(t.no_prediction / n, 1) << " | " << Fixed(t.border / n, 1) << " / "
+          << Fixed(t.texture / n, 1) << " | " << Fixed(t.no_convergence / n, 1) << " | "
+          << Fixed(t.forward_backward / n, 1) << " | " << Fixed(t.low_correlation / n, 1) << " | "
+          << Fixed(t.ambiguous / n, 1) << " | " << Fixed(t.outside_window / n, 1) << " | "
+          << (m == MatchMethod::kHybrid
+                  ? Fixed(a.from_tracks / n, 1) + " / " + Fixed(a.from_descriptors / n, 1)
+                  : std::string("-"))
+          << " |\n";
+    }
+  }
+  return out.str();
+}
+
 std::string MarkdownReport(const EvaluationResult& result, const ReportContext& context,
                            size_t max_skipped) {
   const auto summaries = Summarize(result.records, context.threshold.threshold_px);
@@ -268,6 +327,13 @@ std::string MarkdownReport(const EvaluationResult& result, const ReportContext& 
       << MarkdownWindowTable(result.records, context.threshold.threshold_px);
   out << "\n## Motion given to the predictor vs ground truth (per pair)\n\n"
       << MarkdownMotionErrorTable(result.records);
+  const std::string tracking = MarkdownTrackingTable(result.records);
+  if (!tracking.empty()) {
+    out << "\n## Tracking outcomes (mean per pair)\n\n"
+        << "klt0, klt: how every keypoint's track ended; hybrid: the same for its tracks, and how "
+           "many correspondences each path made (tracks, then guided matches for the rest).\n\n"
+        << tracking;
+  }
   out << "\n## Details\n\n" << MarkdownDetailTable(summaries);
   if (!context.fixed_thresholds.empty()) {
     out << "\n## Precision at fixed thresholds (all cases pooled)\n\n"

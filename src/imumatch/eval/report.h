@@ -41,6 +41,9 @@ std::string MarkdownWindowTable(const std::vector<DetectorPairRecord>& records,
                                 double threshold_px);
 std::string MarkdownMotionErrorTable(const std::vector<DetectorPairRecord>& records);
 // Precision (pooled over every case) of each detector x method at several thresholds.
+// How the tracks of the tracking methods (klt0, klt, hybrid) ended, mean per pair; "" when no
+// record has a tracking run.
+std::string MarkdownTrackingTable(const std::vector<DetectorPairRecord>& records);
 std::string MarkdownThresholdTable(const std::vector<DetectorPairRecord>& records,
                                    const std::vector<double>& thresholds_px);
 // The whole report: context, all tables, skipped pairs (at most max_skipped listed).

@@ -43,6 +43,10 @@ void KltOptions::Check() const {
                  "min_correlation=" << min_correlation);
   IMUMATCH_CHECK(max_segment_seeds >= 1 && max_segment_seeds <= 1000,
                  "max_segment_seeds=" << max_segment_seeds);
+  IMUMATCH_CHECK(max_segment_starts >= 1 && max_segment_starts <= max_segment_seeds,
+                 "max_segment_starts=" << max_segment_starts);
+  IMUMATCH_CHECK(std::isfinite(ambiguity_margin) && ambiguity_margin >= 0.0,
+                 "ambiguity_margin=" << ambiguity_margin);
 }
 
 const char* ToString(TrackOutcome outcome) {
@@ -63,6 +67,8 @@ const char* ToString(TrackOutcome outcome) {
       return "low_correlation";
     case TrackOutcome::kOutsideWindow:
       return "outside_window";
+    case TrackOutcome::kAmbiguous:
+      return "ambiguous";
   }
   return "?";
 }
@@ -94,12 +100,15 @@ void TrackStats::Count(TrackOutcome outcome) {
     case TrackOutcome::kOutsideWindow:
       ++outside_window;
       break;
+    case TrackOutcome::kAmbiguous:
+      ++ambiguous;
+      break;
   }
 }
 
 int TrackStats::OutcomeSum() const {
   return tracked + no_prediction + border + texture + no_convergence + forward_backward +
-         low_correlation + outside_window;
+         low_correlation + outside_window + ambiguous;
 }
 
 std::string TrackStats::ToString() const {
@@ -107,7 +116,7 @@ std::string TrackStats::ToString() const {
   s << "queries=" << queries << " tracked=" << tracked << " no_prediction=" << no_prediction
     << " border=" << border << " texture=" << texture << " no_convergence=" << no_convergence
     << " forward_backward=" << forward_backward << " low_correlation=" << low_correlation
-    << " outside_window=" << outside_window;
+    << " outside_window=" << outside_window << " ambiguous=" << ambiguous;
   return s.str();
 }
 
@@ -153,14 +162,24 @@ TrackResult TrackSeeded(const TrackingPyramid& a, const TrackingPyramid& b,
   align.max_iterations = options.max_iterations;
   align.convergence_px = static_cast<float>(options.convergence_px);
   align.min_texture = static_cast<float>(options.min_texture);
-  const float min_texture = align.min_texture;
+  PatchAlignOptions coarse = align;
+  coarse.max_iterations = std::min(options.max_iterations, 10);
+  coarse.convergence_px = std::max(align.convergence_px, 0.05f);
   const float max_fb2 =
       static_cast<float>(options.max_forward_backward_px * options.max_forward_backward_px);
-  PatchTemplate tpl(h), back(h);
+  // One template per pyramid level, built once per keypoint and aligned from every seed.
+  constexpr int kMaxHalf = 15;
+  const int max_half = std::min(2 * h, kMaxHalf);
+  std::vector<PatchTemplate> tpl(static_cast<size_t>(top + 1), PatchTemplate(max_half));
+  std::vector<AlignStatus> built(static_cast<size_t>(top + 1));
+  PatchTemplate back(max_half);
   TrackResult result;
   result.outcomes.resize(keypoints_a.size());
   result.correlation.assign(keypoints_a.size(), -2.0f);
   std::vector<Eigen::Vector2f> seeds;
+  std::vector<float> seed_corr;
+  std::vector<int> starts;
+  std::vector<Eigen::Vector2f> start_pos;
   for (size_t i = 0; i < keypoints_a.size(); ++i) {
     auto finish = [&](TrackOutcome outcome) {
       result.outcomes[i] = outcome;
@@ -172,20 +191,26 @@ TrackResult TrackSeeded(const TrackingPyramid& a, const TrackingPyramid& b,
       finish(TrackOutcome::kNoPrediction);
       continue;
     }
-    // Seeds in B's image pixels.
-    seeds.clear();
+    // The starting level: the prediction's uncertainty within the patch's reach there.
     const float radius = PredictionRadius(p);
     int level = 0;
     if (radius > static_cast<float>(h)) {
       level = std::min(top, static_cast<int>(std::ceil(std::log2(radius / static_cast<float>(h)))));
     }
+    // Seeds in B's image pixels: the prediction, or points along the epipolar segment 2 px apart
+    // at the level where they are compared (coarser while they would be too many).
+    seeds.clear();
+    int seed_level = level;
     if (p.status == PredictionStatus::kWithDepth) {
       seeds.push_back(undistorter.ToImage(p.uv.cast<double>()).cast<float>());
     } else {
       const Eigen::Vector2f d = p.segment_end - p.segment_start;
-      const float spacing = static_cast<float>(h) * static_cast<float>(1 << level);
-      const int n =
-          std::min(options.max_segment_seeds, 1 + static_cast<int>(std::ceil(d.norm() / spacing)));
+      const float length = d.norm();
+      auto count = [&](int l) {
+        return 1 + static_cast<int>(std::ceil(length / (2.0f * (1 << l))));
+      };
+      while (seed_level < top && count(seed_level) > options.max_segment_seeds) ++seed_level;
+      const int n = std::min(options.max_segment_seeds, count(seed_level));
       for (int k = 0; k < n; ++k) {
         const float s = n == 1 ? 0.5f : static_cast<float>(k) / static_cast<float>(n - 1);
         seeds.push_back(
@@ -197,7 +222,7 @@ TrackResult TrackSeeded(const TrackingPyramid& a, const TrackingPyramid& b,
       continue;
     }
     // The patch's warp in image pixels: the predicted affine map, conjugated by the lens's local
-    // Jacobians at A's keypoint and at the seed.
+    // Jacobians at A's keypoint and at the (middle) seed.
     Eigen::Matrix2f affine = Eigen::Matrix2f::Identity();
     if (options.warp_patch && p.local_affine.allFinite()) {
       Eigen::Matrix2d ja, jb;
@@ -209,55 +234,115 @@ TrackResult TrackSeeded(const TrackingPyramid& a, const TrackingPyramid& b,
       affine = Eigen::Matrix2f::Identity();
     }
     const Eigen::Matrix2f inv = affine.inverse();  // B offset -> A offset
-    // Coarse to fine. A level whose patch leaves the image or has no texture is skipped; the
-    // finest level decides.
-    Eigen::Vector2f pos = seeds[0];
-    TrackOutcome failed = TrackOutcome::kTracked;
-    bool seeded = seeds.size() == 1;
-    for (int l = level; l >= 0; --l) {
-      const float scale = 1.0f / static_cast<float>(1 << l);
-      const AlignStatus built =
-          tpl.Build(a.levels[static_cast<size_t>(l)], ka * scale, inv, h, min_texture);
-      if (built != AlignStatus::kAligned) {
-        if (l == 0)
-          failed = built == AlignStatus::kBorder ? TrackOutcome::kBorder : TrackOutcome::kTexture;
-        continue;
+    const int levels = std::max(level, seed_level);
+    // A patch without texture in both directions at full resolution (a corner found at a coarse
+    // scale, the smooth centre of a blob) is tried again at twice the size.
+    int hk = h;
+    for (int attempt = 0; attempt < 2; ++attempt) {
+      for (int l = 0; l <= levels; ++l) {
+        built[static_cast<size_t>(l)] = tpl[static_cast<size_t>(l)].Build(
+            a.levels[static_cast<size_t>(l)], ka / static_cast<float>(1 << l), inv, hk,
+            align.min_texture);
       }
-      const cv::Mat& img_b = b.levels[static_cast<size_t>(l)];
-      if (!seeded) {
-        float best = -3.0f;
-        for (const Eigen::Vector2f& s : seeds) {
-          const float c = tpl.Correlation(img_b, s * scale);
-          if (c > best) {
-            best = c;
-            pos = s;
-          }
-        }
-        seeded = true;
-      }
-      Eigen::Vector2f xy;
-      const AlignStatus st = tpl.Align(img_b, pos * scale, align, &xy, &result.stats.iterations);
-      if (l > 0) {
-        if (st == AlignStatus::kAligned || st == AlignStatus::kNoConvergence) pos = xy / scale;
-        continue;
-      }
-      if (st == AlignStatus::kBorder) {
-        failed = TrackOutcome::kBorder;
-      } else if (st == AlignStatus::kNoConvergence) {
-        failed = TrackOutcome::kNoConvergence;
-      } else {
-        pos = xy;
-      }
+      if (built[0] != AlignStatus::kTexture || 2 * h > kMaxHalf) break;
+      hk = 2 * h;
     }
-    if (failed != TrackOutcome::kTracked) {
-      finish(failed);
+    if (built[0] != AlignStatus::kAligned) {
+      finish(built[0] == AlignStatus::kBorder ? TrackOutcome::kBorder : TrackOutcome::kTexture);
       continue;
     }
-    // tpl holds the finest level's template.
-    const float c = tpl.Correlation(b.levels[0], pos);
+    // Coarse to fine from a seed: a level whose patch leaves an image or has no texture is
+    // skipped; the finest level decides.
+    // Coarse levels need no hundredth of a pixel: the next level refines.
+    auto descend = [&](Eigen::Vector2f pos, int from, int to, float* corr) {
+      for (int l = from; l >= std::max(to, 1); --l) {
+        if (built[static_cast<size_t>(l)] != AlignStatus::kAligned) continue;
+        const float scale = static_cast<float>(1 << l);
+        Eigen::Vector2f xy;
+        const AlignStatus st = tpl[static_cast<size_t>(l)].Align(
+            b.levels[static_cast<size_t>(l)], pos / scale, coarse, &xy, &result.stats.iterations);
+        if (st == AlignStatus::kAligned || st == AlignStatus::kNoConvergence) pos = xy * scale;
+      }
+      if (to > 0) return std::make_pair(AlignStatus::kAligned, pos);
+      Eigen::Vector2f xy;
+      float c0 = -2.0f;
+      const AlignStatus st =
+          tpl[0].Align(b.levels[0], pos, align, &xy, &result.stats.iterations, &c0);
+      *corr = st == AlignStatus::kAligned ? c0 : -2.0f;
+      return std::make_pair(st, xy);
+    };
+    // Starts: the seed, or the best-correlating local maxima along the segment.
+    starts.clear();
+    if (seeds.size() == 1) {
+      starts.push_back(0);
+    } else {
+      const int sl =
+          built[static_cast<size_t>(seed_level)] == AlignStatus::kAligned ? seed_level : 0;
+      const float scale = static_cast<float>(1 << sl);
+      seed_corr.resize(seeds.size());
+      for (size_t k = 0; k < seeds.size(); ++k) {
+        seed_corr[k] = tpl[static_cast<size_t>(sl)].Correlation(b.levels[static_cast<size_t>(sl)],
+                                                                seeds[k] / scale);
+      }
+      for (size_t k = 0; k < seeds.size(); ++k) {
+        const bool left = k == 0 || seed_corr[k] >= seed_corr[k - 1];
+        const bool right = k + 1 == seeds.size() || seed_corr[k] > seed_corr[k + 1];
+        if (left && right && seed_corr[k] > -2.0f) starts.push_back(static_cast<int>(k));
+      }
+      std::sort(starts.begin(), starts.end(), [&](int x, int y) {
+        return seed_corr[static_cast<size_t>(x)] > seed_corr[static_cast<size_t>(y)];
+      });
+      if (static_cast<int>(starts.size()) > options.max_segment_starts) {
+        starts.resize(static_cast<size_t>(options.max_segment_starts));
+      }
+      if (starts.empty()) starts.push_back(static_cast<int>(seeds.size() / 2));
+    }
+    // Every start descends; the best correlation wins. Another converged position more than a
+    // pixel away that correlates nearly as well makes the track ambiguous (a repeated texture
+    // along the epipolar line).
+    AlignStatus status = AlignStatus::kNoConvergence;
+    Eigen::Vector2f pos = seeds[0];
+    float c = -2.0f, rival = -2.0f;
+    const int from = std::max(level, seed_level);
+    // Starts that meet at the coarsest level (within a pixel there) continue as one.
+    start_pos.clear();
+    for (int k : starts) {
+      Eigen::Vector2f q = seeds[static_cast<size_t>(k)];
+      if (from > 0) q = descend(q, from, from, nullptr).second;
+      const float merge = static_cast<float>(1 << from);
+      bool seen = false;
+      for (const Eigen::Vector2f& o : start_pos)
+        seen = seen || (q - o).squaredNorm() < merge * merge;
+      if (!seen) start_pos.push_back(q);
+    }
+    for (const Eigen::Vector2f& q : start_pos) {
+      float corr = -2.0f;
+      const auto [st, xy] = descend(q, from - 1, 0, &corr);
+      if (st != AlignStatus::kAligned) {
+        if (status != AlignStatus::kAligned && st == AlignStatus::kBorder) status = st;
+        continue;
+      }
+      if (status == AlignStatus::kAligned && (xy - pos).squaredNorm() <= 1.0f) continue;
+      if (corr > c) {
+        rival = c;
+        c = corr;
+        pos = xy;
+      } else {
+        rival = std::max(rival, corr);
+      }
+      status = AlignStatus::kAligned;
+    }
+    if (status != AlignStatus::kAligned) {
+      finish(status == AlignStatus::kBorder ? TrackOutcome::kBorder : TrackOutcome::kNoConvergence);
+      continue;
+    }
     result.correlation[i] = c;
     if (!(c >= static_cast<float>(options.min_correlation))) {
       finish(TrackOutcome::kLowCorrelation);
+      continue;
+    }
+    if (rival >= c - static_cast<float>(options.ambiguity_margin)) {
+      finish(TrackOutcome::kAmbiguous);
       continue;
     }
     if (options.gate_by_window) {
@@ -269,9 +354,10 @@ TrackResult TrackSeeded(const TrackingPyramid& a, const TrackingPyramid& b,
     }
     // Backward: B's patch at the track, warped back into A, aligned in A from A's keypoint.
     Eigen::Vector2f back_xy;
-    AlignStatus bs = back.Build(b.levels[0], pos, affine, h, 0.0f);
+    AlignStatus bs = back.Build(b.levels[0], pos, affine, hk, 0.0f);
     if (bs == AlignStatus::kAligned) {
-      bs = back.Align(a.levels[0], ka, align, &back_xy, &result.stats.iterations);
+      // Only compared with max_forward_backward_px: a coarse convergence does.
+      bs = back.Align(a.levels[0], ka, coarse, &back_xy, &result.stats.iterations);
     }
     if (bs == AlignStatus::kBorder) {
       finish(TrackOutcome::kBorder);

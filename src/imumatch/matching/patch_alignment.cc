@@ -70,49 +70,65 @@ AlignStatus PatchTemplate::Build(const cv::Mat& gray_a, const Eigen::Vector2f& k
   if (identity) {
     SampleGrid(data_a, step_a, ka.x() - reach, ka.y() - reach, ext, ext, ring);
   } else {
+    // Row by row: the sample position moves by inv's first column along a row.
+    const float dxc = inv(0, 0), dyc = inv(1, 0);
     for (int r = 0; r < ext; ++r) {
       const float qy = static_cast<float>(r - h_ - 1);
-      for (int c = 0; c < ext; ++c) {
-        const float qx = static_cast<float>(c - h_ - 1);
-        ring[static_cast<size_t>(r) * ext + c] =
-            SampleUnchecked(data_a, step_a, ka.x() + inv(0, 0) * qx + inv(0, 1) * qy,
-                            ka.y() + inv(1, 0) * qx + inv(1, 1) * qy);
-      }
+      float x = ka.x() - reach * dxc + inv(0, 1) * qy;
+      float y = ka.y() - reach * dyc + inv(1, 1) * qy;
+      float* out = ring + static_cast<size_t>(r) * ext;
+      for (int c = 0; c < ext; ++c, x += dxc, y += dyc)
+        out[c] = SampleUnchecked(data_a, step_a, x, y);
     }
   }
-  // Normalised template statistics and its gradients (central differences, B's pixels).
+  // Normalised template statistics and its gradients (central differences, B's pixels). The
+  // sums are vectorised (their order is not fixed).
   float sum = 0.0f, sum2 = 0.0f;
   for (int r = 1; r <= side; ++r) {
-    for (int c = 1; c <= side; ++c) {
-      const float v = ring[static_cast<size_t>(r) * ext + c];
-      sum += v;
-      sum2 += v * v;
+    const float* row = ring + static_cast<size_t>(r) * ext + 1;
+#pragma omp simd reduction(+ : sum, sum2)
+    for (int c = 0; c < side; ++c) {
+      sum += row[c];
+      sum2 += row[c] * row[c];
     }
   }
   const float mean_t = sum * inv_n;
   const float var_t = sum2 * inv_n - mean_t * mean_t;
   if (!(var_t > 1e-6f)) return AlignStatus::kTexture;
   const float inv_sd_t = 1.0f / std::sqrt(var_t);
-  h00_ = h01_ = h11_ = gsum_x_ = gsum_y_ = gt_x_ = gt_y_ = 0.0f;
+  const float half_sd = 0.5f * inv_sd_t;
+  float h00 = 0.0f, h01 = 0.0f, h11 = 0.0f, gsx = 0.0f, gsy = 0.0f, gtx = 0.0f, gty = 0.0f;
   for (int r = 0; r < side; ++r) {
+    const float* mid = ring + static_cast<size_t>(r + 1) * ext + 1;
+    const float* up = mid - ext;
+    const float* down = mid + ext;
+    float* t_row = t_.data() + static_cast<size_t>(r) * side;
+    float* gx_row = gx_.data() + static_cast<size_t>(r) * side;
+    float* gy_row = gy_.data() + static_cast<size_t>(r) * side;
+#pragma omp simd reduction(+ : h00, h01, h11, gsx, gsy, gtx, gty)
     for (int c = 0; c < side; ++c) {
-      const size_t e = static_cast<size_t>(r + 1) * ext + c + 1;
-      const size_t k = static_cast<size_t>(r) * side + c;
-      const float t = (ring[e] - mean_t) * inv_sd_t;
-      const float dx = 0.5f * inv_sd_t * (ring[e + 1] - ring[e - 1]);
-      const float dy = 0.5f * inv_sd_t * (ring[e + ext] - ring[e - ext]);
-      t_[k] = t;
-      gx_[k] = dx;
-      gy_[k] = dy;
-      h00_ += dx * dx;
-      h01_ += dx * dy;
-      h11_ += dy * dy;
-      gsum_x_ += dx;
-      gsum_y_ += dy;
-      gt_x_ += dx * t;
-      gt_y_ += dy * t;
+      const float t = (mid[c] - mean_t) * inv_sd_t;
+      const float dx = half_sd * (mid[c + 1] - mid[c - 1]);
+      const float dy = half_sd * (down[c] - up[c]);
+      t_row[c] = t;
+      gx_row[c] = dx;
+      gy_row[c] = dy;
+      h00 += dx * dx;
+      h01 += dx * dy;
+      h11 += dy * dy;
+      gsx += dx;
+      gsy += dy;
+      gtx += dx * t;
+      gty += dy * t;
     }
   }
+  h00_ = h00;
+  h01_ = h01;
+  h11_ = h11;
+  gsum_x_ = gsx;
+  gsum_y_ = gsy;
+  gt_x_ = gtx;
+  gt_y_ = gty;
   // Texture in both directions: the smaller eigenvalue of the Hessian per sample.
   const float a00 = h00_ * inv_n, a01 = h01_ * inv_n, a11 = h11_ * inv_n;
   const float min_eig =
@@ -123,7 +139,7 @@ AlignStatus PatchTemplate::Build(const cv::Mat& gray_a, const Eigen::Vector2f& k
 
 AlignStatus PatchTemplate::Align(const cv::Mat& gray_b, const Eigen::Vector2f& start,
                                  const PatchAlignOptions& options, Eigen::Vector2f* xy,
-                                 int64_t* iterations) {
+                                 int64_t* iterations, float* correlation) {
   const int h = h_, side = 2 * h + 1;
   const size_t n = static_cast<size_t>(side) * side;
   const float inv_n = 1.0f / static_cast<float>(n);
@@ -135,6 +151,7 @@ AlignStatus PatchTemplate::Align(const cv::Mat& gray_b, const Eigen::Vector2f& s
   const float det = h00_ * h11_ - h01_ * h01_;
   const float i00 = h11_ / det, i01 = -h01_ / det, i11 = h00_ / det;
   const float* gx = gx_.data();
+  const float* t = t_.data();
   const float* gy = gy_.data();
   float* target = target_.data();
   float x = start.x(), y = start.y();
@@ -144,18 +161,21 @@ AlignStatus PatchTemplate::Align(const cv::Mat& gray_b, const Eigen::Vector2f& s
     ++*iterations;
     if (!BoxInside(gray_b, x, y, -hf, hf, -hf, hf)) return AlignStatus::kBorder;
     SampleGrid(data_b, step_b, x - hf, y - hf, side, side, target);
-    float s1 = 0.0f, s2 = 0.0f, sgx = 0.0f, sgy = 0.0f;
+    float s1 = 0.0f, s2 = 0.0f, sgx = 0.0f, sgy = 0.0f, st = 0.0f;
+#pragma omp simd reduction(+ : s1, s2, sgx, sgy, st)
     for (size_t k = 0; k < n; ++k) {
       const float v = target[k];
       s1 += v;
       s2 += v * v;
       sgx += gx[k] * v;
       sgy += gy[k] * v;
+      st += t[k] * v;
     }
     const float mean_i = s1 * inv_n;
     const float var_i = s2 * inv_n - mean_i * mean_i;
     if (!(var_i > 1e-6f)) return AlignStatus::kBorder;
     const float inv_sd_i = 1.0f / std::sqrt(var_i);
+    if (correlation != nullptr) *correlation = st * inv_n * inv_sd_i;
     const float bx = (sgx - mean_i * gsum_x_) * inv_sd_i - gt_x_;
     const float by = (sgy - mean_i * gsum_y_) * inv_sd_i - gt_y_;
     const float mx = i00 * bx + i01 * by, my = i01 * bx + i11 * by;
@@ -183,10 +203,12 @@ float PatchTemplate::Correlation(const cv::Mat& gray_b, const Eigen::Vector2f& x
   float* target = target_.data();
   SampleGrid(gray_b.ptr<uint8_t>(), gray_b.step[0], xy.x() - hf, xy.y() - hf, side, side, target);
   float s1 = 0.0f, s2 = 0.0f, st = 0.0f;
+  const float* t = t_.data();
+#pragma omp simd reduction(+ : s1, s2, st)
   for (size_t k = 0; k < n; ++k) {
     s1 += target[k];
     s2 += target[k] * target[k];
-    st += t_[k] * target[k];
+    st += t[k] * target[k];
   }
   const float inv_n = 1.0f / static_cast<float>(n);
   const float mean = s1 * inv_n;

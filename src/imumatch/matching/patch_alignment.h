@@ -39,9 +39,12 @@ class PatchTemplate {
                     int h, float min_texture);
 
   // Aligns the built template in gray_b from start. *xy receives the position (kAligned) or the
-  // last estimate (kNoConvergence); kBorder when the patch left image B.
+  // last estimate (kNoConvergence); kBorder when the patch left image B. *correlation (when
+  // given) receives the zero-normalised cross-correlation at the last sampled position (within
+  // the last step, under 5x convergence_px, of *xy when aligned).
   AlignStatus Align(const cv::Mat& gray_b, const Eigen::Vector2f& start,
-                    const PatchAlignOptions& options, Eigen::Vector2f* xy, int64_t* iterations);
+                    const PatchAlignOptions& options, Eigen::Vector2f* xy, int64_t* iterations,
+                    float* correlation = nullptr);
 
   // Zero-normalised cross-correlation in [-1, 1] of the template with B's patch centred at xy;
   // -2 when that patch leaves the image or is flat.
