@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <functional>
 #include <iomanip>
 #include <iostream>
@@ -277,23 +278,39 @@ void RunEval(const std::string& path, CommonArgs a, double interval_s, int step,
   }
 }
 
-void RunDemo(CommonArgs a, int intermediate) {
+void RunDemo(CommonArgs a, int intermediate, const std::string& motions, const std::string& gains) {
   const auto t0 = std::chrono::steady_clock::now();
   EvaluationOptions o = MakeOptions(a);
   PrepareOut(a);
   const std::optional<double> threshold =
       a.threshold > 0.0 ? std::optional<double>(a.threshold) : std::nullopt;
   SeedCaseOptions so;
+  so.motions = SplitList(motions);
   so.intermediate_frames = intermediate;
+  std::vector<double> gain_values;
+  for (const std::string& g : SplitList(gains)) {
+    char* end = nullptr;
+    const double v = std::strtod(g.c_str(), &end);
+    IMUMATCH_CHECK(end != g.c_str() && *end == '\0' && std::isfinite(v) && v > 0.0 && v <= 100.0,
+                   "--gains: '" << g << "' is not a gain in (0, 100]");
+    gain_values.push_back(v);
+  }
   so.imu_model = a.imu_model;
   so.seed = a.seed;
-  std::cerr << "imumatch demo: rendering the seed cases (front1m, back1m, left30, right30; "
-            << intermediate << " intermediate frames) ...\n";
+  std::cerr << "imumatch demo: rendering the seed cases (" << motions << "; " << intermediate
+            << " intermediate frames) ...\n";
   const std::vector<SeedCase> cases = MakeSeedCases(so);
   const double render_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // Exposure changes: the consecutive frames of the first motion again, frame B of every pair
+  // multiplied by each gain.
+  const SeedCase* gain_case = nullptr;
+  for (const SeedCase& c : cases) {
+    if (gain_case == nullptr || c.name == so.motions.front() + "-steps") gain_case = &c;
+  }
   size_t total = 0;
   for (const auto& c : cases) total += c.pairs.size();
+  if (gain_case != nullptr) total += gain_values.size() * gain_case->pairs.size();
   EvaluationResult result;
   size_t done_before = 0;
   auto bar = MakeProgress(a.progress, total, "demo");
@@ -301,6 +318,16 @@ void RunDemo(CommonArgs a, int intermediate) {
     if (bar) o.progress = [&](size_t d, size_t) { bar(done_before + d, total); };
     result.Append(EvaluateSource(c.source, c.pairs, o, c.name));
     done_before += c.pairs.size();
+  }
+  for (double g : gain_values) {
+    if (gain_case == nullptr) break;
+    if (bar) o.progress = [&](size_t d, size_t) { bar(done_before + d, total); };
+    EvaluationOptions og = o;
+    og.gain_b = g;
+    std::ostringstream name;
+    name << gain_case->name << "-gain" << g;
+    result.Append(EvaluateSource(gain_case->source, gain_case->pairs, og, name.str()));
+    done_before += gain_case->pairs.size();
   }
   ReportContext context;
   context.title = "imumatch demo: IMU-guided vs brute-force matching on the synthetic seed cases";
@@ -313,10 +340,14 @@ void RunDemo(CommonArgs a, int intermediate) {
   }
   std::ostringstream r;
   r << std::fixed << std::setprecision(1) << render_s;
-  context.config.push_back({"cases", "seed pairs at the start and end of each 2 s motion" +
-                                         std::string(intermediate > 0 ? ", plus <motion>-steps "
-                                                                        "(consecutive frames)"
-                                                                      : "")});
+  context.config.push_back(
+      {"cases",
+       "seed pairs at the start and end of each 2 s motion" +
+           std::string(intermediate > 0 ? ", plus <motion>-steps (consecutive frames)" : "") +
+           (gain_values.empty() || gain_case == nullptr
+                ? std::string()
+                : ", plus " + gain_case->name +
+                      "-gain<g> (frame B of every pair times the gain g)")});
   context.config.push_back({"rendering", r.str() + " s (640x480, synthetic room, exact depth)"});
   Finish(result, context, a, o);
   const double total_s =
@@ -361,20 +392,32 @@ void AddEvalCommand(CLI::App& app) {
 void AddDemoCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "demo",
-      "Render the seed paper's synthetic cases (front1m, back1m, left30, right30) in "
-      "memory and compare IMU-guided with brute-force matching for every detector");
+      "Render the seed paper's synthetic cases (front1m, back1m, left30, right30) plus an "
+      "in-plane roll and an exposure change in memory, and compare IMU-guided matching, "
+      "brute force and KLT tracking (unseeded, IMU-seeded, hybrid) for every detector");
   struct Args {
     CommonArgs common;
     int intermediate = 3;
+    std::string motions = "front1m,back1m,left30,right30,roll45";
+    std::string gains = "0.6";
   };
   auto args = std::make_shared<Args>();
   args->common.out = "imumatch-demo-out";
+  args->common.methods = "bf,guided,fixed10,klt0,klt,hybrid";
   cmd->add_option("--out", args->common.out, "output folder")->capture_default_str();
   cmd->add_option("--intermediate", args->intermediate,
                   "frames rendered between the start and end of each motion (0 = seed pair only)")
       ->capture_default_str();
   AddCommonOptions(cmd, args->common);
-  cmd->callback([args] { RunDemo(args->common, args->intermediate); });
+  cmd->add_option("--motions", args->motions,
+                  "synthetic motions: front1m, back1m, left30, right30, roll45 (45 deg/s about "
+                  "the optical axis), shake, fast_rotation, walk")
+      ->capture_default_str();
+  cmd->add_option("--gains", args->gains,
+                  "exposure gains applied to frame B of the first motion's consecutive pairs, "
+                  "one extra case each (empty: none)")
+      ->capture_default_str();
+  cmd->callback([args] { RunDemo(args->common, args->intermediate, args->motions, args->gains); });
 }
 
 }  // namespace imumatch::apps
