@@ -381,7 +381,7 @@ void WritePairsCsv(std::ostream& out, const std::vector<DetectorPairRecord>& rec
   out << "case,pair,frame_a,frame_b,t_a_ns,t_b_ns,detector,method,keypoints_a,keypoints_b,"
          "keypoints_a_with_depth,read_ms,extract_ms,motion_ms,predict_ms,match_ms,matches,correct,"
          "false,possible,precision,recall,motion_rotation_error_deg,motion_translation_error_m,"
-         "has_depth,window_recall\n";
+         "has_depth,window_recall,from_tracks,from_descriptors\n";
   out << std::setprecision(6);
   for (const auto& r : records) {
     for (const auto& run : r.runs) {
@@ -395,7 +395,7 @@ void WritePairsCsv(std::ostream& out, const std::vector<DetectorPairRecord>& rec
           << c.counts.wrong << "," << c.possible << "," << c.precision << "," << c.recall << ","
           << r.motion_rotation_error_deg << "," << r.motion_translation_error_m << ","
           << (r.has_depth ? 1 : 0) << "," << ComputeWindowRecall(r, run, threshold_px).Recall()
-          << "\n";
+          << "," << run.from_tracks << "," << run.from_descriptors << "\n";
     }
   }
 }
@@ -476,6 +476,20 @@ nlohmann::json ReportToJson(const EvaluationResult& result, const ReportContext&
                        {"possible", c.possible},
                        {"precision", c.precision},
                        {"recall", c.recall}});
+      if (IsTracking(run.method)) {
+        const TrackStats& ts = run.track_stats;
+        pairs.back()["tracking"] = {{"from_tracks", run.from_tracks},
+                                    {"from_descriptors", run.from_descriptors},
+                                    {"tracked", ts.tracked},
+                                    {"no_prediction", ts.no_prediction},
+                                    {"border", ts.border},
+                                    {"texture", ts.texture},
+                                    {"no_convergence", ts.no_convergence},
+                                    {"forward_backward", ts.forward_backward},
+                                    {"low_correlation", ts.low_correlation},
+                                    {"ambiguous", ts.ambiguous},
+                                    {"outside_window", ts.outside_window}};
+      }
     }
   }
   j["pairs"] = pairs;
