@@ -72,6 +72,12 @@ struct DatasetOptions {
   Rigid3d tum_cam_from_imu;  // identity: the simulated IMU sits at the camera
   SplineFitOptions spline;
 
+  // Bounded work: the IMU is simulated over the ground truth's whole span (200 Hz: an hour is
+  // 720 000 samples, 40 MB); a longer span is an InputError (a timestamp jump?). At most
+  // kMaxSimulatedImuSpanNs (1 h, far longer than any TUM sequence: the longest is 2.5 min).
+  static constexpr int64_t kMaxSimulatedImuSpanNs = 3'600'000'000'000;
+  int64_t max_simulated_imu_span_ns = kMaxSimulatedImuSpanNs;
+
   ImuBufferOptions imu_buffer;
   // Keep frames [first_frame, first_frame + max_frames) after association (0 = all).
   size_t first_frame = 0;

@@ -414,6 +414,22 @@ TEST(Dataset, MissingListedImageNamesListAndLine) {
   ExpectInputError([&] { LoadDataset(tum.root); }, tum.root + "/rgb.txt", 3, "rgb/2.png not found");
 }
 
+TEST(Dataset, SimulatedImuSpanIsBounded) {
+  TempDir dir;
+  const TumFolder tum = MakeTumFolder(dir, "seq");  // ground truth over 2 s
+  DatasetOptions options;
+  options.check_files_exist = false;
+  options.max_simulated_imu_span_ns = 1'000'000'000;  // 1 s
+  ExpectInputError([&] { LoadDataset(tum.root, options); }, tum.root + "/groundtruth.txt", 0,
+                   "ground truth spans 2");
+  options.simulate_imu = false;  // nothing simulated: no bound to meet
+  EXPECT_NO_THROW(LoadDataset(tum.root, options));
+  options.max_simulated_imu_span_ns = DatasetOptions::kMaxSimulatedImuSpanNs + 1;
+  EXPECT_THROW(options.Check(), InvalidArgument);
+  options.max_simulated_imu_span_ns = 0;
+  EXPECT_THROW(options.Check(), InvalidArgument);
+}
+
 TEST(Dataset, UnknownFolderAndBadOptions) {
   TempDir dir;
   ExpectInputError([&] { LoadDataset(dir.path()); }, dir.path(), 0, "not a recognised dataset");
