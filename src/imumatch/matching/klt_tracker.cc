@@ -240,9 +240,10 @@ TrackResult TrackSeeded(const TrackingPyramid& a, const TrackingPyramid& b,
     int hk = h;
     for (int attempt = 0; attempt < 2; ++attempt) {
       for (int l = 0; l <= levels; ++l) {
+        // A coarse level only starts the next one: a quarter-pixel warp error is no matter there.
         built[static_cast<size_t>(l)] = tpl[static_cast<size_t>(l)].Build(
             a.levels[static_cast<size_t>(l)], ka / static_cast<float>(1 << l), inv, hk,
-            align.min_texture);
+            align.min_texture, l == 0 ? 0.05f : 0.25f);
       }
       if (built[0] != AlignStatus::kTexture || 2 * h > kMaxHalf) break;
       hk = 2 * h;
@@ -354,7 +355,8 @@ TrackResult TrackSeeded(const TrackingPyramid& a, const TrackingPyramid& b,
     }
     // Backward: B's patch at the track, warped back into A, aligned in A from A's keypoint.
     Eigen::Vector2f back_xy;
-    AlignStatus bs = back.Build(b.levels[0], pos, affine, hk, 0.0f);
+    // Compared with max_forward_backward_px only: a quarter-pixel warp error is no matter.
+    AlignStatus bs = back.Build(b.levels[0], pos, affine, hk, 0.0f, 0.25f);
     if (bs == AlignStatus::kAligned) {
       // Only compared with max_forward_backward_px: a coarse convergence does.
       bs = back.Align(a.levels[0], ka, coarse, &back_xy, &result.stats.iterations);

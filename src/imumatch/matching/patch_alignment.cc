@@ -48,7 +48,8 @@ PatchTemplate::PatchTemplate(int max_half_size) : max_half_(max_half_size) {
 }
 
 AlignStatus PatchTemplate::Build(const cv::Mat& gray_a, const Eigen::Vector2f& ka,
-                                 const Eigen::Matrix2f& inv, int h, float min_texture) {
+                                 const Eigen::Matrix2f& inv, int h, float min_texture,
+                                 float identity_tolerance_px) {
   h_ = h < 1 ? 1 : (h > max_half_ ? max_half_ : h);
   const int side = 2 * h_ + 1, ext = side + 2;
   const size_t n = static_cast<size_t>(side) * side;
@@ -57,11 +58,9 @@ AlignStatus PatchTemplate::Build(const cv::Mat& gray_a, const Eigen::Vector2f& k
   const size_t step_a = gray_a.step[0];
   const float reach = static_cast<float>(h_ + 1);
   float* ring = ring_.data();
-  // A warp that moves no template sample by more than 0.05 px is the identity: A's patch is
-  // then read on a grid too.
   const bool identity =
       (inv - Eigen::Matrix2f::Identity()).cwiseAbs().maxCoeff() * static_cast<float>(2 * h_) <
-      0.05f;
+      identity_tolerance_px;
   const float reach_a = reach * inv.cwiseAbs().rowwise().sum().maxCoeff();
   if (!(reach_a < 1e6f) ||
       !BoxInside(gray_a, ka.x(), ka.y(), -reach_a, reach_a, -reach_a, reach_a)) {

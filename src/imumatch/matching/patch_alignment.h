@@ -34,9 +34,11 @@ class PatchTemplate {
   explicit PatchTemplate(int max_half_size);
 
   // Samples the template around ka in gray_a (half size h <= max_half_size). kBorder when the
-  // patch leaves the image, kTexture when it has no texture in both directions.
+  // patch leaves the image, kTexture when it has no texture in both directions. A warp that moves
+  // no sample by more than identity_tolerance_px is taken as the identity (A's patch read on a
+  // grid, several times faster than the warped read).
   AlignStatus Build(const cv::Mat& gray_a, const Eigen::Vector2f& ka, const Eigen::Matrix2f& inv,
-                    int h, float min_texture);
+                    int h, float min_texture, float identity_tolerance_px = 0.05f);
 
   // Aligns the built template in gray_b from start. *xy receives the position (kAligned) or the
   // last estimate (kNoConvergence); kBorder when the patch left image B. *correlation (when
