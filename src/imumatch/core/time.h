@@ -1,5 +1,6 @@
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -22,5 +23,11 @@ int64_t SecondsToNs(double seconds);  // Rounds to the nearest nanosecond.
 
 // "1305031102.175304000": seconds with nine decimals, exact.
 std::string FormatNsAsSeconds(int64_t t_ns);
+
+// Wall time of a stage.
+using SteadyClock = std::chrono::steady_clock;
+inline double MsSince(SteadyClock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(SteadyClock::now() - t0).count();
+}
 
 }  // namespace imumatch

@@ -12,6 +12,7 @@
 #include "imumatch/eval/ground_truth.h"
 #include "imumatch/eval/pair_selection.h"
 #include "imumatch/features/feature_factory.h"
+#include "imumatch/matching/descriptor_distance.h"
 #include "imumatch/matching/match_types.h"
 #include "imumatch/matching/predictor.h"
 #include "imumatch/matching/subpixel_refinement.h"
@@ -23,10 +24,7 @@
 
 namespace imumatch {
 
-// Adapter: matching's DescriptorView needs binary descriptors whose row length is a multiple of 8
-// bytes, but AKAZE's MLDB has 61. Pads CV_8U rows with zero bytes up to the next multiple of 8
-// (Hamming distances are unchanged); other matrices are returned as they are.
-cv::Mat PadBinaryDescriptors(const cv::Mat& descriptors);
+// PadBinaryDescriptors (AKAZE's 61-byte rows for DescriptorView): matching/descriptor_distance.h.
 
 struct MethodRun {
   MatchMethod method = MatchMethod::kBruteForce;

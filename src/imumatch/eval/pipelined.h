@@ -14,13 +14,9 @@
 #include <thread>
 #include <utility>
 
+#include "imumatch/core/time.h"  // SteadyClock, MsSince
+
 namespace imumatch {
-
-using SteadyClock = std::chrono::steady_clock;
-
-inline double MsSince(SteadyClock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(SteadyClock::now() - t0).count();
-}
 
 // A bounded FIFO between the reader thread and the processing thread.
 template <typename T>

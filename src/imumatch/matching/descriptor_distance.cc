@@ -138,4 +138,14 @@ const char* DescriptorKernelName(DescriptorNorm norm) {
 #endif
 }
 
+cv::Mat PadBinaryDescriptors(const cv::Mat& descriptors) {
+  if (descriptors.empty() || descriptors.type() != CV_8UC1 || descriptors.cols % 8 == 0) {
+    return descriptors;
+  }
+  const int cols = (descriptors.cols + 7) / 8 * 8;
+  cv::Mat padded = cv::Mat::zeros(descriptors.rows, cols, CV_8UC1);
+  descriptors.copyTo(padded(cv::Rect(0, 0, descriptors.cols, descriptors.rows)));
+  return padded;
+}
+
 }  // namespace imumatch

@@ -77,4 +77,9 @@ inline float DistanceToCost(DescriptorNorm norm, float distance) {
 // for benchmark reports.
 const char* DescriptorKernelName(DescriptorNorm norm);
 
+// Adapter: DescriptorView needs binary descriptors whose row length is a multiple of 8 bytes, but
+// AKAZE's MLDB has 61. Pads CV_8U rows with zero bytes up to the next multiple of 8 (Hamming
+// distances are unchanged); other matrices are returned as they are.
+cv::Mat PadBinaryDescriptors(const cv::Mat& descriptors);
+
 }  // namespace imumatch

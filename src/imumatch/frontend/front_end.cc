@@ -1,0 +1,400 @@
+#include "imumatch/frontend/front_end.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+#include <opencv2/imgproc.hpp>
+
+#include "imumatch/core/error.h"
+#include "imumatch/core/time.h"
+#include "imumatch/imu/imu_integrator.h"
+#include "imumatch/matching/baseline_matchers.h"
+#include "imumatch/matching/descriptor_distance.h"
+#include "imumatch/matching/grid_index.h"
+
+namespace imumatch {
+
+void FrontEndOptions::Check() const {
+  features.Check();
+  prediction.Check();
+  guided.Check();
+  subpixel.Check();
+  klt.Check();
+  motion.Check();
+  pose.Check();
+  IMUMATCH_CHECK(std::isfinite(still_s) && still_s >= 0.0 && still_s <= 3600.0,
+                 "still_s=" << still_s);
+  IMUMATCH_CHECK(std::isfinite(unknown_velocity_sigma) && unknown_velocity_sigma > 0.0,
+                 "unknown_velocity_sigma=" << unknown_velocity_sigma);
+  IMUMATCH_CHECK(std::isfinite(min_velocity_sigma) && min_velocity_sigma > 0.0 &&
+                     min_velocity_sigma <= unknown_velocity_sigma,
+                 "min_velocity_sigma=" << min_velocity_sigma);
+  IMUMATCH_CHECK(min_matches >= 0, "min_matches=" << min_matches);
+  if (bias) {
+    IMUMATCH_CHECK(bias->gyro.allFinite() && bias->accel.allFinite(), "bias must be finite");
+  }
+}
+
+const char* ToString(FrameStatus status) {
+  switch (status) {
+    case FrameStatus::kFirst:
+      return "first";
+    case FrameStatus::kGuided:
+      return "guided";
+    case FrameStatus::kBruteForce:
+      return "brute_force";
+  }
+  return "?";
+}
+
+FrontEnd::FrontEnd(const PinholeCamera& camera, const ImuParams& imu_params,
+                   const Rigid3d& cam_from_imu, const FrontEndOptions& options)
+    : undistorter_(camera),
+      imu_params_(imu_params),
+      cam_from_imu_(cam_from_imu),
+      options_(options) {
+  camera.Check();
+  imu_params.Check();
+  options.Check();
+  velocity_sigma_ = options.unknown_velocity_sigma;
+}
+
+void FrontEnd::AddImu(const ImuSample& sample) { imu_.Push(sample, "front end IMU stream"); }
+
+namespace {
+
+// Roll and pitch from a mean specific force f (the accelerometer at rest reads -g in the IMU
+// frame, i.e. points up): the rotation taking f's direction to world +z, yaw zero.
+Eigen::Quaterniond AttitudeFromGravity(const Eigen::Vector3d& specific_force) {
+  return Eigen::Quaterniond::FromTwoVectors(specific_force.normalized(), Eigen::Vector3d::UnitZ());
+}
+
+}  // namespace
+
+void FrontEnd::Initialise(int64_t t_ns, FrontEndResult& result) {
+  std::ostringstream note;
+  note << std::scientific << std::setprecision(2);
+  // The still period must lie before the frame: frames before it only wait.
+  if (imu_.empty() || imu_.end_ns() < t_ns ||
+      t_ns - imu_.begin_ns() < SecondsToNs(options_.still_s)) {
+    result.event = "waiting for " + std::to_string(options_.still_s) +
+                   " s of IMU before a frame to initialise gravity and the gyro bias";
+    return;
+  }
+  const int64_t t0 = imu_.begin_ns();
+  const int64_t t1 = std::min(t_ns, t0 + SecondsToNs(options_.still_s));
+  Rigid3d world_from_imu;
+  try {
+    const StillInitialization init = InitializeFromStill(imu_, t0, t1, imu_params_);
+    world_from_imu = init.world_from_imu;
+    bias_ = init.bias;
+    gyro_bias_sigma_ = init.gyro_bias_sigma;
+    note << "gravity and gyro bias from the still start of the IMU (" << init.num_samples
+         << " samples): bias " << bias_.gyro.x() << " " << bias_.gyro.y() << " " << bias_.gyro.z()
+         << " rad/s";
+  } catch (const Error& e) {
+    // Not still (or too short): gravity from the mean specific force, no bias estimate.
+    Eigen::Vector3d f = Eigen::Vector3d::Zero();
+    const std::vector<ImuSample> samples = imu_.Slice(t0, std::max(t1, t0 + 1));
+    for (const ImuSample& s : samples) f += s.accel_m_s2;
+    world_from_imu = Rigid3d(AttitudeFromGravity(f), Eigen::Vector3d::Zero());
+    bias_ = ImuBias();
+    gyro_bias_sigma_ = options_.motion.gyro_bias_sigma;
+    note << "the IMU's start is not still (" << e.what()
+         << "): gravity from its mean, gyro bias assumed zero";
+  }
+  if (options_.bias) {
+    bias_ = *options_.bias;
+    gyro_bias_sigma_ = options_.motion.gyro_bias_sigma;
+    note << "; the given bias is used";
+  }
+  bias_t_ns_ = t1;
+  // From rest at t1 to the frame: the velocity's error grows with the accelerometer bias, which a
+  // still start does not reveal.
+  NavState state;
+  state.t_ns = t1;
+  state.world_from_imu = world_from_imu;
+  if (t_ns > t1) {
+    try {
+      const ImuPreintegration pim = Preintegrate(imu_.Slice(t1, t_ns), bias_, imu_params_);
+      state = Propagate(state, pim, imu_params_.gravity_in_world);
+    } catch (const Error& e) {
+      note << "; IMU not propagated to the first frame (" << e.what() << ")";
+    }
+  }
+  const double since = NsToSeconds(t_ns - t1);
+  world_from_imu_ = Rigid3d(state.world_from_imu.rotation, Eigen::Vector3d::Zero());
+  velocity_ = state.velocity_in_world;
+  velocity_sigma_ =
+      std::max(options_.min_velocity_sigma,
+               std::hypot(options_.min_velocity_sigma, options_.motion.accel_bias_sigma * since));
+  note << "; velocity propagated from rest over " << std::fixed << std::setprecision(2) << since
+       << " s (sigma " << velocity_sigma_ << " m/s)";
+  notes_.push_back(note.str());
+  result.event = notes_.back();
+  initialised_ = true;
+}
+
+std::vector<Match> FrontEnd::MatchPass(const CameraMotion& motion, const Features& features,
+                                       const std::vector<KeypointInfo>& ideal, const cv::Mat& image,
+                                       std::vector<KeypointPrediction>& predictions,
+                                       int& from_tracks) {
+  const Previous& prev = *previous_;
+  const PinholeCamera& camera = undistorter_.camera();
+  std::vector<float> depths;
+  if (!prev.depth.empty()) {
+    depths = SampleDepths(prev.depth, camera.depth_scale, prev.features.keypoints,
+                          options_.prediction.depth_sampling);
+  }
+  predictions = PredictKeypoints(undistorter_, motion, prev.ideal, depths, options_.prediction);
+  std::vector<Match> out;
+  std::vector<KeypointPrediction> rest;
+  const std::vector<KeypointPrediction>* guided_predictions = &predictions;
+  from_tracks = 0;
+  if (options_.hybrid) {
+    const TrackingPyramid pa = TrackingPyramid::Build(prev.image, options_.klt.max_level);
+    const TrackingPyramid pb = TrackingPyramid::Build(image, options_.klt.max_level);
+    TrackResult tracks =
+        TrackSeeded(pa, pb, prev.features.keypoints, predictions, undistorter_, options_.klt);
+    rest = predictions;
+    for (size_t i = 0; i < rest.size(); ++i) {
+      if (tracks.outcomes[i] == TrackOutcome::kTracked) rest[i].status = PredictionStatus::kInvalid;
+    }
+    guided_predictions = &rest;
+    from_tracks = static_cast<int>(tracks.tracks.size());
+    out = std::move(tracks.tracks);
+  }
+  GridIndex grid;
+  grid.Build(ideal, camera.width, camera.height,
+             static_cast<float>(options_.guided.grid_cell_size));
+  MatchResult r = MatchGuided(*guided_predictions, prev.ideal,
+                              DescriptorView::FromMat(prev.features.descriptors), ideal, grid,
+                              DescriptorView::FromMat(features.descriptors), options_.guided);
+  if (options_.refine_subpixel) {
+    RefineMatches(prev.image, image, prev.features.keypoints, features.keypoints, predictions,
+                  camera, options_.subpixel, r.matches);
+  }
+  out.insert(out.end(), r.matches.begin(), r.matches.end());
+  return out;
+}
+
+FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
+  const auto start = SteadyClock::now();
+  const PinholeCamera& camera = undistorter_.camera();
+  IMUMATCH_CHECK(!frame.image.empty(), "empty image at t = " << frame.t_ns << " ns");
+  IMUMATCH_CHECK(frame.image.cols == camera.width && frame.image.rows == camera.height,
+                 "image of " << frame.image.cols << "x" << frame.image.rows
+                             << " at t = " << frame.t_ns << " ns; the camera is " << camera.width
+                             << "x" << camera.height);
+  IMUMATCH_CHECK(frame.depth.empty() ||
+                     (frame.depth.type() == CV_16UC1 && frame.depth.size() == frame.image.size()),
+                 "depth at t = " << frame.t_ns << " ns must be 16-bit and of the image's size");
+  IMUMATCH_CHECK(!previous_ || frame.t_ns > previous_->t_ns,
+                 "frame at t = " << frame.t_ns << " ns is not after the previous one");
+  FrontEndResult result;
+  result.t_ns = frame.t_ns;
+  cv::Mat gray = frame.image;
+  if (gray.channels() == 3) {
+    cv::cvtColor(frame.image, gray, cv::COLOR_BGR2GRAY);
+  }
+  IMUMATCH_CHECK(gray.type() == CV_8UC1, "image at t = " << frame.t_ns << " ns must be 8-bit");
+
+  auto t0 = SteadyClock::now();
+  Features features = ExtractFeatures(gray, options_.features);
+  features.descriptors = PadBinaryDescriptors(features.descriptors);
+  const std::vector<KeypointInfo> ideal = ToIdealKeypointInfos(features.keypoints, undistorter_);
+  result.extract_ms = MsSince(t0);
+  result.keypoints = features.keypoints;
+
+  auto remember = [&](const Rigid3d& world_from_cam) {
+    Previous p;
+    p.t_ns = frame.t_ns;
+    p.image = gray;
+    p.depth = frame.depth;
+    p.features = std::move(features);
+    p.ideal = ideal;
+    p.world_from_cam = world_from_cam;
+    previous_ = std::move(p);
+  };
+  if (!initialised_ || !previous_) {
+    result.status = FrameStatus::kFirst;
+    if (!initialised_) Initialise(frame.t_ns, result);
+    result.world_from_cam = world_from_imu_ * cam_from_imu_.Inverse();
+    result.velocity_in_world = velocity_;
+    result.velocity_sigma = velocity_sigma_;
+    remember(result.world_from_cam);
+    result.total_ms = MsSince(start);
+    return result;
+  }
+  const Previous& prev = *previous_;
+  const double dt = NsToSeconds(frame.t_ns - prev.t_ns);
+
+  // The IMU's motion from the state at the previous frame.
+  t0 = SteadyClock::now();
+  bool imu_ok = true;
+  ImuPreintegration pim;
+  try {
+    ImuStateAtFrame state;
+    state.world_from_imu = world_from_imu_;
+    state.velocity_in_world = velocity_;
+    state.bias = bias_;
+    CameraMotionOptions mo = options_.motion;
+    mo.velocity_sigma = velocity_sigma_;
+    const double since = std::max(0.0, NsToSeconds(prev.t_ns - bias_t_ns_));
+    mo.gyro_bias_sigma =
+        std::sqrt(gyro_bias_sigma_ * gyro_bias_sigma_ +
+                  imu_params_.gyro_random_walk * imu_params_.gyro_random_walk * since);
+    result.imu_motion =
+        ComputeCameraMotion(imu_, prev.t_ns, frame.t_ns, state, imu_params_, cam_from_imu_, mo);
+    pim = Preintegrate(imu_.Slice(prev.t_ns, frame.t_ns), bias_, imu_params_);
+  } catch (const Error& e) {
+    imu_ok = false;
+    result.event = std::string("IMU gap: ") + e.what();
+  }
+  result.motion_ms = MsSince(t0);
+
+  // First pass.
+  t0 = SteadyClock::now();
+  const bool enough_features =
+      prev.features.keypoints.size() >= 2 && features.keypoints.size() >= 2;
+  std::vector<KeypointPrediction> predictions;
+  if (imu_ok && enough_features) {
+    result.matches_pass1 =
+        MatchPass(result.imu_motion, features, ideal, gray, predictions, result.from_tracks);
+  }
+  result.status = FrameStatus::kGuided;
+  if (!imu_ok || !enough_features ||
+      static_cast<int>(result.matches_pass1.size()) < options_.min_matches) {
+    if (imu_ok && !enough_features) {
+      result.event = "too few features (previous frame " +
+                     std::to_string(prev.features.keypoints.size()) + ", this frame " +
+                     std::to_string(features.keypoints.size()) + ")";
+    } else if (imu_ok) {
+      result.event = "lost: " + std::to_string(result.matches_pass1.size()) +
+                     " guided matches (fewer than " + std::to_string(options_.min_matches) + ")";
+    }
+    result.status = FrameStatus::kBruteForce;
+    result.from_tracks = 0;
+    if (enough_features) {
+      BruteForceOptions bf;
+      result.matches_pass1 = MatchBruteForce(prev.features.descriptors, features.descriptors, bf);
+    } else {
+      result.matches_pass1.clear();
+    }
+  }
+  result.matches = result.matches_pass1;
+  result.match1_ms = MsSince(t0);
+
+  // Pose fit on the correspondences: PnP with the previous frame's depth, else epipolar.
+  t0 = SteadyClock::now();
+  std::vector<Eigen::Vector3d> points_a;
+  std::vector<Eigen::Vector2d> pixels_a, pixels_b, pixels_b3;
+  std::vector<double> depths_used;
+  for (const Match& m : result.matches) {
+    const cv::Point2f& ka = prev.features.keypoints[static_cast<size_t>(m.query_idx)].pt;
+    const Eigen::Vector2d pb =
+        m.refined_uv_b.allFinite()
+            ? m.refined_uv_b.cast<double>()
+            : Eigen::Vector2d(features.keypoints[static_cast<size_t>(m.train_idx)].pt.x,
+                              features.keypoints[static_cast<size_t>(m.train_idx)].pt.y);
+    pixels_a.emplace_back(ka.x, ka.y);
+    pixels_b.push_back(pb);
+    if (prev.depth.empty()) continue;
+    const double z =
+        SampleDepth(prev.depth, camera.depth_scale, ka.x, ka.y, options_.prediction.depth_sampling);
+    if (!(z >= options_.prediction.min_depth && z <= options_.prediction.max_depth)) continue;
+    const Eigen::Vector2d ia = undistorter_.ToIdeal(Eigen::Vector2d(ka.x, ka.y));
+    points_a.emplace_back((ia.x() - camera.cx) / camera.fx * z,
+                          (ia.y() - camera.cy) / camera.fy * z, z);
+    pixels_b3.push_back(pb);
+    depths_used.push_back(z);
+  }
+  const Rigid3d guess = imu_ok ? result.imu_motion.cam_b_from_cam_a : Rigid3d();
+  if (static_cast<int>(points_a.size()) >= options_.pose.min_inliers) {
+    result.pose = FitPosePnp(points_a, pixels_b3, undistorter_, guess, options_.pose);
+    result.pose_from_depth = result.pose.ok;
+  }
+  if (!result.pose.ok && imu_ok) {
+    result.pose = FitPoseEpipolar(pixels_a, pixels_b, undistorter_, guess, options_.pose);
+  }
+  result.cam_from_prev = result.pose.ok ? result.pose.cam_b_from_cam_a : guess;
+  result.pose_ms = MsSince(t0);
+
+  // Second pass: predictions from the fitted pose, windows from its residual.
+  if (options_.second_pass && result.pose.ok && result.status == FrameStatus::kGuided) {
+    t0 = SteadyClock::now();
+    CameraMotion refined = result.imu_motion;
+    refined.cam_b_from_cam_a = result.pose.cam_b_from_cam_a;
+    if (result.pose_from_depth) {
+      // The fit's error: rms residual over sqrt(inliers), as an angle and at the median depth.
+      std::vector<double> z = depths_used;
+      std::nth_element(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(z.size() / 2), z.end());
+      const double f = 0.5 * (camera.fx + camera.fy);
+      const double angle = 2.0 * std::max(result.pose.rms_px, 0.5) / f /
+                           std::sqrt(static_cast<double>(result.pose.inliers));
+      refined.covariance.setZero();
+      refined.covariance.topLeftCorner<3, 3>().diagonal().setConstant(angle * angle);
+      const double st = angle * z[z.size() / 2];
+      refined.covariance.bottomRightCorner<3, 3>().diagonal().setConstant(st * st);
+    }
+    std::vector<KeypointPrediction> predictions2;
+    int tracks2 = 0;
+    result.matches = MatchPass(refined, features, ideal, gray, predictions2, tracks2);
+    result.from_tracks = tracks2;
+    result.second_pass = true;
+    result.match2_ms = MsSince(t0);
+  }
+
+  // State at this frame.
+  result.world_from_cam = prev.world_from_cam * result.cam_from_prev.Inverse();
+  const Rigid3d world_from_imu_b = result.world_from_cam * cam_from_imu_;
+  Eigen::Vector3d v = velocity_;
+  double sigma = options_.unknown_velocity_sigma;
+  Eigen::Quaterniond attitude = world_from_imu_b.rotation;
+  if (imu_ok) {
+    NavState a;
+    a.t_ns = prev.t_ns;
+    a.world_from_imu = world_from_imu_;
+    a.velocity_in_world = velocity_;
+    const NavState b = Propagate(a, pim, imu_params_.gravity_in_world);
+    attitude = b.world_from_imu.rotation;  // the gyro's
+    v = b.velocity_in_world;
+    sigma = std::sqrt(velocity_sigma_ * velocity_sigma_ +
+                      std::pow(options_.motion.accel_bias_sigma * dt, 2) +
+                      imu_params_.accel_noise_density * imu_params_.accel_noise_density * dt);
+    if (result.pose_from_depth) {
+      // The velocity that explains the fitted translation, given the IMU's increments.
+      const Eigen::Matrix3d ra = world_from_imu_.rotation.toRotationMatrix();
+      const Eigen::Vector3d& g = imu_params_.gravity_in_world;
+      const Eigen::Vector3d pa = (prev.world_from_cam * cam_from_imu_).translation;
+      const Eigen::Vector3d va =
+          (world_from_imu_b.translation - pa - ra * pim.delta_position - 0.5 * g * dt * dt) / dt;
+      const Eigen::Vector3d vb = va + ra * pim.delta_velocity + g * dt;
+      std::vector<double> z = depths_used;
+      std::nth_element(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(z.size() / 2), z.end());
+      const double f = 0.5 * (camera.fx + camera.fy);
+      const double st =
+          std::max(0.002, 2.0 * std::max(result.pose.rms_px, 0.5) / f * z[z.size() / 2] /
+                              std::sqrt(static_cast<double>(result.pose.inliers)));
+      const double sm = st / dt;
+      const double wp = 1.0 / (sigma * sigma), wm = 1.0 / (sm * sm);
+      v = (wp * v + wm * vb) / (wp + wm);
+      sigma = std::sqrt(1.0 / (wp + wm));
+    }
+  }
+  if (result.status == FrameStatus::kBruteForce) {
+    sigma = std::max(sigma, options_.unknown_velocity_sigma);  // re-initialised
+  }
+  world_from_imu_ = Rigid3d(attitude, world_from_imu_b.translation);
+  velocity_ = v;
+  velocity_sigma_ = std::max(options_.min_velocity_sigma, sigma);
+  result.velocity_in_world = velocity_;
+  result.velocity_sigma = velocity_sigma_;
+  remember(result.world_from_cam);
+  result.total_ms = MsSince(start);
+  return result;
+}
+
+}  // namespace imumatch

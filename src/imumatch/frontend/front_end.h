@@ -1,0 +1,149 @@
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "imumatch/camera/pixel_undistorter.h"
+#include "imumatch/core/rigid3.h"
+#include "imumatch/features/feature_factory.h"
+#include "imumatch/frontend/pose_estimation.h"
+#include "imumatch/imu/camera_motion.h"
+#include "imumatch/imu/imu_buffer.h"
+#include "imumatch/imu/imu_params.h"
+#include "imumatch/matching/guided_matcher.h"
+#include "imumatch/matching/klt_tracker.h"
+#include "imumatch/matching/predictor.h"
+#include "imumatch/matching/subpixel_refinement.h"
+
+namespace imumatch {
+
+// A visual-inertial front end that needs no ground truth: fed IMU samples and frames in time
+// order, it matches each frame with the previous one (IMU-guided, or the hybrid tracker), fits the
+// relative pose, matches again with the fitted pose, and keeps its own state (attitude, velocity,
+// gyro bias). It composes the predictor, the matchers and a pose estimator; it owns no I/O.
+//
+// State without ground truth:
+//  - gyro bias and gravity (roll, pitch) from the still start of the IMU stream (or a given bias);
+//    the IMU is then propagated from rest to the first frame, the velocity's uncertainty growing
+//    with the unobservable accelerometer bias (motion.accel_bias_sigma per second);
+//  - with depth in the previous frame: PnP + RANSAC on its 3D points and their matches; the
+//    velocity implied by the fitted translation is fused with the IMU's (per axis, inverse
+//    variance);
+//  - without depth: the rotation is the gyro's, the translation direction comes from the
+//    epipolar geometry and its length from the IMU velocity, whose uncertainty keeps growing;
+//  - attitude from the gyro (its drift is far below a PnP rotation's noise over a few frames).
+struct FrontEndOptions {
+  FeatureOptions features;  // ORB, max_keypoints 1000
+  // Hybrid: IMU-seeded KLT first, guided matching for the keypoints whose track failed. Otherwise
+  // guided descriptor matching only.
+  bool hybrid = false;
+  PredictionOptions prediction;
+  GuidedMatcherOptions guided;
+  bool refine_subpixel = true;
+  SubpixelOptions subpixel;
+  KltOptions klt;
+  // Integration mode and the attitude / bias sigmas; velocity_sigma is the front end's own.
+  CameraMotionOptions motion;
+  // Gravity and gyro bias from the first still_s seconds of the IMU stream.
+  double still_s = 1.0;
+  std::optional<ImuBias> bias;  // given: used instead of the still estimate
+  // Velocity uncertainty (m/s per axis) when nothing constrains it: after a loss or an IMU gap.
+  double unknown_velocity_sigma = 1.0;
+  double min_velocity_sigma = 0.02;
+  // Fewer matches than this in the first pass: the frame is matched by brute force instead.
+  int min_matches = 20;
+  PoseFitOptions pose;
+  // Second pass: predict again with the fitted pose (covariance from its residual) and match.
+  bool second_pass = true;
+  void Check() const;  // throws InvalidArgument
+};
+
+struct FrontEndFrame {
+  int64_t t_ns = 0;
+  cv::Mat image;  // 8-bit gray (BGR is converted)
+  cv::Mat depth;  // CV_16U raw (camera.depth_scale units per metre, 0 = none) or empty
+};
+
+enum class FrameStatus {
+  kFirst,       // the first frame: state initialised, nothing to match
+  kGuided,      // matched through the IMU's prediction
+  kBruteForce,  // fallback: too few matches, an IMU gap or a bad frame
+};
+const char* ToString(FrameStatus status);
+
+struct FrontEndResult {
+  int64_t t_ns = 0;
+  FrameStatus status = FrameStatus::kFirst;
+  std::string event;  // what happened (fallback reason, initialisation), empty when routine
+  std::vector<cv::KeyPoint> keypoints;  // this frame's
+  // The previous frame's keypoints (query) to this frame's (train; -1 for a track, its position
+  // in refined_uv_b): the final pass, and the first pass's for comparison.
+  std::vector<Match> matches;
+  std::vector<Match> matches_pass1;
+  bool second_pass = false;
+  int from_tracks = 0;      // hybrid: correspondences made by tracking (final pass)
+  CameraMotion imu_motion;  // the IMU's prediction (first pass)
+  PoseFit pose;             // the fit between the passes
+  bool pose_from_depth = false;
+  Rigid3d cam_from_prev;   // the estimated motion (the fit, or the IMU's when it failed)
+  Rigid3d world_from_cam;  // the estimated pose (world: gravity-aligned, first IMU pose)
+  Eigen::Vector3d velocity_in_world = Eigen::Vector3d::Zero();  // IMU velocity
+  double velocity_sigma = 0.0;
+  // Milliseconds per stage.
+  double extract_ms = 0.0, motion_ms = 0.0, match1_ms = 0.0, pose_ms = 0.0, match2_ms = 0.0;
+  double total_ms = 0.0;
+};
+
+class FrontEnd {
+ public:
+  // camera: the images' intrinsics and lens; cam_from_imu: the extrinsics.
+  FrontEnd(const PinholeCamera& camera, const ImuParams& imu_params, const Rigid3d& cam_from_imu,
+           const FrontEndOptions& options = FrontEndOptions());
+
+  // IMU samples in time order (InputError for a sample not after the previous one).
+  void AddImu(const ImuSample& sample);
+  // The next frame. Needs IMU samples up to its timestamp for the prediction (otherwise: brute
+  // force, with the reason). Throws InvalidArgument for an empty image or one of another size
+  // than the camera's; never for what the images or the IMU contain.
+  FrontEndResult Process(const FrontEndFrame& frame);
+
+  // Initialisation notes (bias and gravity source), one line each.
+  const std::vector<std::string>& notes() const { return notes_; }
+  const FrontEndOptions& options() const { return options_; }
+
+ private:
+  struct Previous {
+    int64_t t_ns = 0;
+    cv::Mat image, depth;
+    Features features;
+    std::vector<KeypointInfo> ideal;
+    Rigid3d world_from_cam;
+  };
+  void Initialise(int64_t t_ns, FrontEndResult& result);
+  std::vector<Match> MatchPass(const CameraMotion& motion, const Features& features,
+                               const std::vector<KeypointInfo>& ideal, const cv::Mat& image,
+                               std::vector<KeypointPrediction>& predictions, int& from_tracks);
+
+  PixelUndistorter undistorter_;
+  ImuParams imu_params_;
+  Rigid3d cam_from_imu_;
+  FrontEndOptions options_;
+  ImuBuffer imu_;
+  std::vector<std::string> notes_;
+  bool initialised_ = false;
+  std::optional<Previous> previous_;
+  // State at the previous frame.
+  Rigid3d world_from_imu_;
+  Eigen::Vector3d velocity_ = Eigen::Vector3d::Zero();
+  double velocity_sigma_ = 1.0;
+  ImuBias bias_;
+  double gyro_bias_sigma_ = 0.0;
+  int64_t bias_t_ns_ = 0;
+};
+
+}  // namespace imumatch

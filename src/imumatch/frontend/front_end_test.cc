@@ -1,0 +1,145 @@
+#include "imumatch/frontend/front_end.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "imumatch/core/error.h"
+#include "imumatch/core/time.h"
+#include "imumatch/sim/synthetic_sequence.h"
+
+namespace imumatch {
+namespace {
+
+// The walk motion (forward speed ramped to 0.8 m/s, bobbing, head rotation) at 20 Hz, 320 x 240,
+// exact depth, simulated EuRoC-grade IMU: still for the first 0.5 s.
+const SyntheticSequence& Walk() {
+  static const SyntheticSequence seq = [] {
+    SyntheticSequenceOptions so;
+    so.motion = "walk";
+    so.camera = PinholeCamera::KinectDefault().ScaledToWidth(320);
+    so.frame_rate_hz = 20.0;
+    return MakeSyntheticSequence(so);
+  }();
+  return seq;
+}
+
+FrontEndOptions Options() {
+  FrontEndOptions o;
+  o.features.max_keypoints = 400;
+  o.still_s = 0.4;
+  return o;
+}
+
+// Feeds the IMU up to (and one sample past) each frame, then the frame.
+class Runner {
+ public:
+  Runner(const SyntheticSequence& seq, const FrontEndOptions& options)
+      : seq_(seq), fe_(seq.camera, seq.imu_params, seq.cam_from_imu, options) {}
+  FrontEndResult Next(size_t k, const cv::Mat* image = nullptr) {
+    const SyntheticFrame& f = seq_.frames[k];
+    while (next_imu_ < seq_.imu.size()) {
+      const ImuSample& s = seq_.imu[next_imu_];
+      if (skip_ && s.t_ns > skip_from_ && s.t_ns < skip_to_) {
+        ++next_imu_;
+        continue;
+      }
+      fe_.AddImu(s);
+      ++next_imu_;
+      if (s.t_ns >= f.t_ns) break;
+    }
+    FrontEndFrame in;
+    in.t_ns = f.t_ns;
+    in.image = image != nullptr ? *image : f.rgb;
+    in.depth = f.depth;
+    return fe_.Process(in);
+  }
+  void DropImu(int64_t from, int64_t to) {
+    skip_ = true;
+    skip_from_ = from;
+    skip_to_ = to;
+  }
+  FrontEnd& front_end() { return fe_; }
+
+ private:
+  const SyntheticSequence& seq_;
+  FrontEnd fe_;
+  size_t next_imu_ = 0;
+  bool skip_ = false;
+  int64_t skip_from_ = 0, skip_to_ = 0;
+};
+
+TEST(FrontEnd, RunFromRestRecoversTheVelocity) {
+  const SyntheticSequence& seq = Walk();
+  Runner run(seq, Options());
+  const int64_t t_check = SecondsToNs(0.5 + 1.0);  // 1 s into the motion
+  bool checked = false;
+  for (size_t k = 0; k < seq.frames.size(); ++k) {
+    const FrontEndResult r = run.Next(k);
+    if (seq.frames[k].t_ns < SecondsToNs(0.4)) {  // waiting for 0.4 s of still IMU
+      EXPECT_EQ(r.status, FrameStatus::kFirst);
+      EXPECT_NE(r.event.find("waiting"), std::string::npos) << r.event;
+      continue;
+    }
+    if (r.status == FrameStatus::kFirst) {
+      EXPECT_NE(r.event.find("still start"), std::string::npos) << r.event;
+      continue;
+    }
+    EXPECT_EQ(r.status, FrameStatus::kGuided) << "frame " << k << ": " << r.event;
+    EXPECT_TRUE(r.pose_from_depth) << "frame " << k << ": " << r.pose.reason;
+    if (!checked && seq.frames[k].t_ns >= t_check) {
+      const Eigen::Vector3d truth = seq.frames[k].imu_velocity_in_world;
+      // The front end's world is gravity-aligned with yaw zero at the start; compare speeds and
+      // the vertical component (yaw-free).
+      EXPECT_GT(truth.norm(), 0.3);
+      EXPECT_NEAR(r.velocity_in_world.norm(), truth.norm(), 0.05 * truth.norm());
+      EXPECT_NEAR(r.velocity_in_world.z(), truth.z(), 0.05 * truth.norm());
+      checked = true;
+    }
+  }
+  EXPECT_TRUE(checked);
+}
+
+TEST(FrontEnd, ImuGapAndBlackFrameAreReportedAndTheRunGoesOn) {
+  const SyntheticSequence& seq = Walk();
+  Runner run(seq, Options());
+  const size_t gap_frame = 30, black_frame = 40;
+  // 0.2 s without IMU before frame 30.
+  run.DropImu(seq.frames[gap_frame].t_ns - SecondsToNs(0.2), seq.frames[gap_frame].t_ns - 1);
+  const cv::Mat black = cv::Mat::zeros(seq.frames[0].rgb.size(), seq.frames[0].rgb.type());
+  const int64_t gap_from = seq.frames[gap_frame].t_ns - SecondsToNs(0.2);
+  for (size_t k = 0; k < seq.frames.size(); ++k) {
+    const FrontEndResult r = run.Next(k, k == black_frame ? &black : nullptr);
+    if (r.status == FrameStatus::kFirst) continue;
+    // The intervals that overlap the gap, the black frame and the one after it (nothing to
+    // match against) fall back to brute force with the reason; every other frame is guided.
+    const bool over_gap = seq.frames[k].t_ns > gap_from && k <= gap_frame;
+    if (over_gap) {
+      EXPECT_EQ(r.status, FrameStatus::kBruteForce) << "frame " << k;
+      EXPECT_NE(r.event.find("IMU gap"), std::string::npos) << r.event;
+    } else if (k == black_frame || k == black_frame + 1) {
+      EXPECT_EQ(r.status, FrameStatus::kBruteForce) << "frame " << k;
+      EXPECT_NE(r.event.find("too few features"), std::string::npos) << r.event;
+      EXPECT_TRUE(r.matches.empty());
+    } else {
+      EXPECT_EQ(r.status, FrameStatus::kGuided) << "frame " << k << ": " << r.event;
+    }
+    EXPECT_TRUE(r.world_from_cam.translation.allFinite());
+  }
+}
+
+TEST(FrontEnd, BadFramesAreRefused) {
+  const SyntheticSequence& seq = Walk();
+  FrontEnd fe(seq.camera, seq.imu_params, seq.cam_from_imu, Options());
+  FrontEndFrame empty;
+  EXPECT_THROW(fe.Process(empty), InvalidArgument);
+  FrontEndFrame wrong;
+  wrong.image = cv::Mat::zeros(10, 10, CV_8UC1);
+  EXPECT_THROW(fe.Process(wrong), InvalidArgument);
+  FrontEndOptions bad = Options();
+  bad.min_matches = -1;
+  EXPECT_THROW(FrontEnd(seq.camera, seq.imu_params, seq.cam_from_imu, bad), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace imumatch
