@@ -11,5 +11,6 @@ void AddSynthCommand(CLI::App& app);  // synth_command.cc
 void AddImuCommand(CLI::App& app);    // imu_command.cc
 void AddEvalCommand(CLI::App& app);   // eval_command.cc
 void AddDemoCommand(CLI::App& app);   // eval_command.cc
+void AddTrackCommand(CLI::App& app);  // track_command.cc
 
 }  // namespace imumatch::apps

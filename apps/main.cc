@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   imumatch::apps::AddImuCommand(app);
   imumatch::apps::AddDemoCommand(app);
   imumatch::apps::AddEvalCommand(app);
+  imumatch::apps::AddTrackCommand(app);
 
   try {
     app.parse(argc, argv);

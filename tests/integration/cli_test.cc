@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "imumatch/io/trajectory_io.h"
 #include "imumatch/testing/test_data.h"
 
 namespace imumatch {
@@ -95,6 +96,26 @@ TEST_F(CliTest, SynthThenEvalOnTheWrittenSequence) {
   }
   EXPECT_TRUE(fs::exists(Path("out/summary.csv")));
   EXPECT_TRUE(fs::exists(Path("out/report.md")));
+}
+
+TEST_F(CliTest, TrackRunsWithoutGroundTruthStateAndSaysWhatItSkipped) {
+  const CommandResult synth = RunCli(
+      "synth --motion walk --width 320 --fps 20 --duration 0.6 --still 0.5 --out " + Path("seq"));
+  ASSERT_EQ(synth.exit_code, 0) << synth.output;
+  // A frame whose image is gone: skipped with its file named, the run goes on.
+  fs::remove(Path("seq/rgb/" + std::string("0.750000000.png")));
+  CommandResult r = RunCli("track " + Path("seq") + " --max-keypoints 300 --out " + Path("t"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("Judged by the ground truth"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("fell back to brute force: 0"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("0.750000000.png"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::exists(Path("t/frames.csv")));
+  // The trajectory is a TUM file: one pose per frame from the initialised state on.
+  const auto poses = ReadTumTrajectory(Path("t/trajectory.txt"));
+  EXPECT_GT(poses.size(), 10u);
+  // A folder without an IMU (the TUM pose pair) is refused with its name.
+  r = RunCli("track " + testing::DataPath("tum_fr1_xyz_pair") + " --out " + Path("t2"));
+  EXPECT_EQ(r.exit_code, 3) << r.output;
 }
 
 TEST_F(CliTest, EvalOnTheRealTumPairPrintsItsAutomaticThreshold) {

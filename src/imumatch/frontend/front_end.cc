@@ -221,6 +221,7 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
   if (!initialised_ || !previous_) {
     result.status = FrameStatus::kFirst;
     if (!initialised_) Initialise(frame.t_ns, result);
+    result.has_state = initialised_;
     result.world_from_cam = world_from_imu_ * cam_from_imu_.Inverse();
     result.velocity_in_world = velocity_;
     result.velocity_sigma = velocity_sigma_;
@@ -341,8 +342,45 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
     }
     std::vector<KeypointPrediction> predictions2;
     int tracks2 = 0;
-    result.matches = MatchPass(refined, features, ideal, gray, predictions2, tracks2);
-    result.from_tracks = tracks2;
+    std::vector<Match> second = MatchPass(refined, features, ideal, gray, predictions2, tracks2);
+    // Keep the matches the fitted geometry explains: reprojection (with depth) or epipolar
+    // distance (without) within the fit's inlier threshold, in ideal pixels.
+    const Rigid3d& fitted = result.pose.cam_b_from_cam_a;
+    const Eigen::Matrix3d rf = fitted.rotation.toRotationMatrix();
+    const Eigen::Vector3d tf = fitted.translation;
+    const double f = 0.5 * (camera.fx + camera.fy);
+    result.matches.clear();
+    result.from_tracks = 0;
+    for (const Match& m : second) {
+      const cv::Point2f& ka = prev.features.keypoints[static_cast<size_t>(m.query_idx)].pt;
+      const Eigen::Vector2d pb =
+          m.refined_uv_b.allFinite()
+              ? m.refined_uv_b.cast<double>()
+              : Eigen::Vector2d(features.keypoints[static_cast<size_t>(m.train_idx)].pt.x,
+                                features.keypoints[static_cast<size_t>(m.train_idx)].pt.y);
+      const Eigen::Vector2d ia = undistorter_.ToIdeal(Eigen::Vector2d(ka.x, ka.y));
+      const Eigen::Vector2d ib = undistorter_.ToIdeal(pb);
+      const Eigen::Vector3d xa((ia.x() - camera.cx) / camera.fx, (ia.y() - camera.cy) / camera.fy,
+                               1.0);
+      const Eigen::Vector3d xb((ib.x() - camera.cx) / camera.fx, (ib.y() - camera.cy) / camera.fy,
+                               1.0);
+      double residual = 0.0;
+      const double z = prev.depth.empty() ? std::nan("")
+                                          : SampleDepth(prev.depth, camera.depth_scale, ka.x, ka.y,
+                                                        options_.prediction.depth_sampling);
+      if (result.pose_from_depth && z >= options_.prediction.min_depth &&
+          z <= options_.prediction.max_depth) {
+        const Eigen::Vector3d q = rf * (xa * z) + tf;
+        residual = f * (q.head<2>() / q.z() - xb.head<2>()).norm();
+      } else {
+        const Eigen::Vector3d line = tf.cross(rf * xa);
+        const double norm = std::hypot(line.x(), line.y());
+        residual = norm > 0.0 ? f * std::fabs(xb.dot(line)) / norm : 0.0;
+      }
+      if (!(residual <= options_.pose.ransac_px)) continue;
+      result.matches.push_back(m);
+      result.from_tracks += m.train_idx < 0 ? 1 : 0;
+    }
     result.second_pass = true;
     result.match2_ms = MsSince(t0);
   }
@@ -392,6 +430,7 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
   velocity_sigma_ = std::max(options_.min_velocity_sigma, sigma);
   result.velocity_in_world = velocity_;
   result.velocity_sigma = velocity_sigma_;
+  result.has_state = true;
   remember(result.world_from_cam);
   result.total_ms = MsSince(start);
   return result;

@@ -58,7 +58,9 @@ struct FrontEndOptions {
   // Fewer matches than this in the first pass: the frame is matched by brute force instead.
   int min_matches = 20;
   PoseFitOptions pose;
-  // Second pass: predict again with the fitted pose (covariance from its residual) and match.
+  // Second pass: predict again with the fitted pose (covariance from its residual), match, and
+  // keep the matches the fitted geometry explains (reprojection with depth, epipolar distance
+  // without, within pose.ransac_px).
   bool second_pass = true;
   void Check() const;  // throws InvalidArgument
 };
@@ -91,6 +93,7 @@ struct FrontEndResult {
   PoseFit pose;             // the fit between the passes
   bool pose_from_depth = false;
   Rigid3d cam_from_prev;   // the estimated motion (the fit, or the IMU's when it failed)
+  bool has_state = false;  // false while waiting for the IMU to initialise (no pose yet)
   Rigid3d world_from_cam;  // the estimated pose (world: gravity-aligned, first IMU pose)
   Eigen::Vector3d velocity_in_world = Eigen::Vector3d::Zero();  // IMU velocity
   double velocity_sigma = 0.0;

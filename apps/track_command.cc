@@ -1,0 +1,126 @@
+// imumatch track: the front end on a recording, no ground truth given to it. Writes the
+// per-frame CSV, the trajectory in TUM format, a report and match images; judges the matches and
+// the trajectory when the dataset has ground truth.
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include "commands.h"
+#include "imumatch/core/error.h"
+#include "imumatch/eval/frame_source.h"
+#include "imumatch/eval/track_run.h"
+#include "imumatch/io/dataset.h"
+#include "imumatch/io/output_files.h"
+
+namespace imumatch::apps {
+namespace {
+
+struct TrackArgs {
+  std::string path;
+  std::string out = "imumatch-track-out";
+  bool overwrite = false;
+  std::string detector = "orb";
+  int max_keypoints = 1000;
+  bool hybrid = false;
+  bool no_second_pass = false;
+  double still_s = 0.5;
+  size_t first = 0;
+  size_t max_frames = 0;
+  int images = 2;
+  bool progress = false;
+  std::string imu_model = "euroc";
+  uint64_t seed = 42;
+};
+
+void RunTrackCommand(const TrackArgs& a) {
+  TrackRunOptions o;
+  o.front_end.features.kind = ParseDetectorKind(a.detector);
+  o.front_end.features.max_keypoints = a.max_keypoints;
+  o.front_end.hybrid = a.hybrid;
+  o.front_end.second_pass = !a.no_second_pass;
+  o.front_end.still_s = a.still_s;
+  o.first_frame = a.first;
+  o.max_frames = a.max_frames;
+  o.keep_visuals = a.images;
+  o.Check();
+  const OutputFolderCheck check = PrepareOutputFolder(a.out, a.overwrite);
+  if (!check.note.empty()) std::cerr << "imumatch: note: " << check.note << "\n";
+  DatasetOptions dopts;
+  dopts.imu_model = a.imu_model;
+  dopts.imu_seed = a.seed;
+  // A missing image is a bad frame: skipped with its name when it is read, the run goes on.
+  dopts.check_files_exist = false;
+  const EvalSource source = MakeDiskSource(LoadDataset(a.path, dopts));
+  std::cerr << "imumatch track: " << source.dataset.name << " (" << source.dataset.frames.size()
+            << " frames); IMU: " << source.dataset.imu_source_note << "\n";
+  if (a.progress || isatty(fileno(stderr))) {
+    const auto start = std::chrono::steady_clock::now();
+    o.progress = [start](size_t done, size_t n) {
+      const double s =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      const int width = 30, filled = n > 0 ? static_cast<int>(width * done / n) : width;
+      std::fprintf(stderr, "\rtrack [%s%s] %zu/%zu frames, %.0f s ",
+                   std::string(filled, '#').c_str(), std::string(width - filled, '.').c_str(), done,
+                   n, s);
+      if (done == n) std::fprintf(stderr, "\n");
+    };
+  }
+  const TrackRunResult result = RunTrack(source, o);
+  const std::string report = TrackReportMarkdown(
+      result, o,
+      {{"dataset", a.path},
+       {"detector", a.detector + ", " + std::to_string(a.max_keypoints) + " keypoints"},
+       {"matcher", std::string(a.hybrid ? "hybrid (IMU-seeded KLT + guided)" : "guided") +
+                       (a.no_second_pass ? ", one pass" : ", two passes")},
+       {"ground truth",
+        result.has_truth ? "judged afterwards, never given to the front end" : "none"}});
+  std::cout << report << std::flush;
+  const auto files = WriteTrackOutputs(a.out, result, o, report);
+  RecordOutputs(a.out, files);
+  std::cout << "\nWrote " << files.size() << " files to " << a.out
+            << " (report.md, frames.csv, trajectory.txt, match_*.png)\n";
+}
+
+}  // namespace
+
+void AddTrackCommand(CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "track",
+      "Run the front end on a recording (TUM RGB-D, EuRoC, synthetic folder) with no ground truth "
+      "given to it: state from the IMU's still start and the fitted poses, two matching passes, "
+      "brute force when lost; judged afterwards when the dataset has ground truth");
+  auto a = std::make_shared<TrackArgs>();
+  cmd->add_option("DATASET", a->path, "dataset folder")->required();
+  cmd->add_option("--out", a->out, "output folder")->capture_default_str();
+  cmd->add_flag("--overwrite", a->overwrite,
+                "write into an --out folder that holds files imumatch did not write");
+  cmd->add_option("--detector", a->detector, "sift, surf, orb, fast, akaze or brisk")
+      ->capture_default_str();
+  cmd->add_option("--max-keypoints", a->max_keypoints, "keypoints per frame")
+      ->capture_default_str()
+      ->check(CLI::Range(1, FeatureOptions::kMaxKeypoints));
+  cmd->add_flag("--hybrid", a->hybrid,
+                "track with the IMU-seeded KLT first, guided matching for the failed tracks");
+  cmd->add_flag("--one-pass", a->no_second_pass, "no second matching pass with the fitted pose");
+  cmd->add_option("--still", a->still_s,
+                  "seconds of still IMU at the start (gravity and gyro bias)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 3600.0));
+  cmd->add_option("--first", a->first, "first frame")->capture_default_str();
+  cmd->add_option("--max-frames", a->max_frames, "frames to run (0 = all)")->capture_default_str();
+  cmd->add_option("--images", a->images, "match images of the first N judged frames")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_flag("--progress", a->progress, "progress bar on stderr (default: when it is a TTY)");
+  cmd->add_option("--imu-model", a->imu_model,
+                  "noise model of simulated IMUs: euroc | mems | ideal")
+      ->capture_default_str();
+  cmd->add_option("--seed", a->seed, "seed of a simulated IMU")->capture_default_str();
+  cmd->callback([a] { RunTrackCommand(*a); });
+}
+
+}  // namespace imumatch::apps
