@@ -5,8 +5,10 @@
 
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <memory>
+#include <sstream>
 #include <string>
 
 #include "commands.h"
@@ -31,6 +33,7 @@ struct TrackArgs {
   size_t first = 0;
   size_t max_frames = 0;
   int images = 2;
+  std::string thresholds = "1,3,8";
   bool progress = false;
   std::string imu_model = "euroc";
   uint64_t seed = 42;
@@ -46,6 +49,16 @@ void RunTrackCommand(const TrackArgs& a) {
   o.first_frame = a.first;
   o.max_frames = a.max_frames;
   o.keep_visuals = a.images;
+  o.thresholds_px.clear();
+  std::stringstream list(a.thresholds);
+  for (std::string item; std::getline(list, item, ',');) {
+    if (item.empty()) continue;
+    char* end = nullptr;
+    const double v = std::strtod(item.c_str(), &end);
+    IMUMATCH_CHECK(end != item.c_str() && *end == '\0',
+                   "--thresholds: '" << item << "' is not a number of pixels");
+    o.thresholds_px.push_back(v);
+  }
   o.Check();
   const OutputFolderCheck check = PrepareOutputFolder(a.out, a.overwrite);
   if (!check.note.empty()) std::cerr << "imumatch: note: " << check.note << "\n";
@@ -115,6 +128,9 @@ void AddTrackCommand(CLI::App& app) {
   cmd->add_option("--images", a->images, "match images of the first N judged frames")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--thresholds", a->thresholds,
+                  "thresholds (px) at which matches are judged when there is ground truth")
+      ->capture_default_str();
   cmd->add_flag("--progress", a->progress, "progress bar on stderr (default: when it is a TTY)");
   cmd->add_option("--imu-model", a->imu_model,
                   "noise model of simulated IMUs: euroc | mems | ideal")
