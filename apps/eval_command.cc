@@ -21,7 +21,7 @@
 #include "imumatch/eval/end_to_end.h"
 #include "imumatch/eval/evaluation.h"
 #include "imumatch/eval/outputs.h"
-#include "imumatch/eval/pose_pair.h"
+#include "imumatch/io/pose_pair.h"
 #include "imumatch/eval/report.h"
 #include "imumatch/eval/seed_cases.h"
 #include "imumatch/eval/summary.h"

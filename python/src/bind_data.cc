@@ -15,7 +15,7 @@
 #include "imumatch/eval/evaluation.h"
 #include "imumatch/eval/frame_source.h"
 #include "imumatch/eval/pair_selection.h"
-#include "imumatch/eval/pose_pair.h"
+#include "imumatch/io/pose_pair.h"
 #include "imumatch/eval/summary.h"
 #include "imumatch/io/dataset.h"
 #include "imumatch/io/trajectory_io.h"

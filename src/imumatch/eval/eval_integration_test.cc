@@ -15,7 +15,7 @@
 #include "imumatch/eval/evaluation.h"
 #include "imumatch/eval/match_image.h"
 #include "imumatch/eval/plots.h"
-#include "imumatch/eval/pose_pair.h"
+#include "imumatch/io/pose_pair.h"
 #include "imumatch/eval/report.h"
 #include "imumatch/eval/seed_cases.h"
 #include "imumatch/eval/summary.h"

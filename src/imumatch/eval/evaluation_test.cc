@@ -4,7 +4,7 @@
 #include "imumatch/eval/end_to_end.h"
 #include "imumatch/eval/pair_motion.h"
 #include "imumatch/eval/pipelined.h"
-#include "imumatch/eval/pose_pair.h"
+#include "imumatch/io/pose_pair.h"
 #include "imumatch/eval/summary.h"
 #include "imumatch/io/dataset.h"
 #include "imumatch/io/trajectory_io.h"

@@ -6,7 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "imumatch/eval/evaluation.h"
-#include "imumatch/eval/pose_pair.h"
+#include "imumatch/io/pose_pair.h"
 #include "imumatch/eval/seed_cases.h"
 #include "imumatch/eval/summary.h"
 #include "imumatch/io/dataset.h"

@@ -1,4 +1,4 @@
-#include "imumatch/eval/pose_pair.h"
+#include "imumatch/io/pose_pair.h"
 
 #include <filesystem>
 
