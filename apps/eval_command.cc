@@ -21,13 +21,13 @@
 #include "imumatch/eval/end_to_end.h"
 #include "imumatch/eval/evaluation.h"
 #include "imumatch/eval/outputs.h"
-#include "imumatch/io/pose_pair.h"
 #include "imumatch/eval/report.h"
 #include "imumatch/eval/seed_cases.h"
 #include "imumatch/eval/summary.h"
 #include "imumatch/imu/imu_integrator.h"
 #include "imumatch/io/dataset.h"
 #include "imumatch/io/output_files.h"
+#include "imumatch/io/pose_pair.h"
 
 namespace imumatch::apps {
 namespace {

@@ -15,11 +15,11 @@
 #include "imumatch/eval/evaluation.h"
 #include "imumatch/eval/match_image.h"
 #include "imumatch/eval/plots.h"
-#include "imumatch/io/pose_pair.h"
 #include "imumatch/eval/report.h"
 #include "imumatch/eval/seed_cases.h"
 #include "imumatch/eval/summary.h"
 #include "imumatch/io/dataset.h"
+#include "imumatch/io/pose_pair.h"
 #include "imumatch/sim/synthetic_sequence.h"
 #include "imumatch/testing/test_data.h"
 

@@ -4,9 +4,9 @@
 #include "imumatch/eval/end_to_end.h"
 #include "imumatch/eval/pair_motion.h"
 #include "imumatch/eval/pipelined.h"
-#include "imumatch/io/pose_pair.h"
 #include "imumatch/eval/summary.h"
 #include "imumatch/io/dataset.h"
+#include "imumatch/io/pose_pair.h"
 #include "imumatch/io/trajectory_io.h"
 #include "imumatch/testing/test_data.h"
 

@@ -6,10 +6,10 @@
 #include <gtest/gtest.h>
 
 #include "imumatch/eval/evaluation.h"
-#include "imumatch/io/pose_pair.h"
 #include "imumatch/eval/seed_cases.h"
 #include "imumatch/eval/summary.h"
 #include "imumatch/io/dataset.h"
+#include "imumatch/io/pose_pair.h"
 #include "imumatch/testing/test_data.h"
 
 namespace imumatch {
