@@ -20,7 +20,6 @@
 #include "imumatch/io/image_io.h"
 #include "imumatch/matching/baseline_matchers.h"
 #include "imumatch/matching/descriptor_distance.h"
-#include "imumatch/matching/grid_index.h"
 #include "imumatch/matching/klt_tracker.h"
 
 #include "imumatch/eval/pair_motion.h"
@@ -144,16 +143,10 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
     if (method == MatchMethod::kKlt) return run;
     // Hybrid: guided matching for the keypoints whose track failed, inside the same windows.
     t0 = Clock::now();
-    std::vector<KeypointPrediction> rest = predictions;
-    for (size_t i = 0; i < rest.size(); ++i) {
-      if (tracks.outcomes[i] == TrackOutcome::kTracked) rest[i].status = PredictionStatus::kInvalid;
-    }
-    GridIndex grid;
-    grid.Build(cb.ideal, camera.width, camera.height,
-               static_cast<float>(options.guided.grid_cell_size));
-    MatchResult result =
-        MatchGuided(rest, ca.ideal, DescriptorView::FromMat(fa.descriptors), cb.ideal, grid,
-                    DescriptorView::FromMat(fb.descriptors), options.guided);
+    MatchResult result = MatchGuided(PredictionsOfFailedTracks(predictions, tracks), ca.ideal,
+                                     DescriptorView::FromMat(fa.descriptors), cb.ideal,
+                                     DescriptorView::FromMat(fb.descriptors), camera.width,
+                                     camera.height, options.guided);
     if (options.refine_subpixel) {
       run.refine_stats = RefineMatches(image_a.image, image_b.image, fa.keypoints, fb.keypoints,
                                        predictions, camera, options.subpixel, result.matches);
@@ -165,12 +158,9 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
     return run;
   }
   t0 = Clock::now();
-  GridIndex grid;
-  grid.Build(cb.ideal, camera.width, camera.height,
-             static_cast<float>(options.guided.grid_cell_size));
-  MatchResult result =
-      MatchGuided(predictions, ca.ideal, DescriptorView::FromMat(fa.descriptors), cb.ideal, grid,
-                  DescriptorView::FromMat(fb.descriptors), options.guided);
+  MatchResult result = MatchGuided(predictions, ca.ideal, DescriptorView::FromMat(fa.descriptors),
+                                   cb.ideal, DescriptorView::FromMat(fb.descriptors), camera.width,
+                                   camera.height, options.guided);
   run.match_ms = MsSince(t0);
   run.stats = result.stats;
   run.outcomes = std::move(result.outcomes);

@@ -12,7 +12,6 @@
 #include "imumatch/imu/imu_integrator.h"
 #include "imumatch/matching/baseline_matchers.h"
 #include "imumatch/matching/descriptor_distance.h"
-#include "imumatch/matching/grid_index.h"
 
 namespace imumatch {
 
@@ -64,6 +63,14 @@ FrontEnd::FrontEnd(const PinholeCamera& camera, const ImuParams& imu_params,
 void FrontEnd::AddImu(const ImuSample& sample) { imu_.Push(sample, "front end IMU stream"); }
 
 namespace {
+
+// Where a correspondence ends in B (image pixels): the refined position or the track's, else the
+// matched keypoint.
+Eigen::Vector2d PositionInB(const Match& m, const std::vector<cv::KeyPoint>& keypoints_b) {
+  if (m.refined_uv_b.allFinite()) return m.refined_uv_b.cast<double>();
+  const cv::Point2f& p = keypoints_b[static_cast<size_t>(m.train_idx)].pt;
+  return Eigen::Vector2d(p.x, p.y);
+}
 
 // Roll and pitch from a mean specific force f (the accelerometer at rest reads -g in the IMU
 // frame, i.e. points up): the rotation taking f's direction to world +z, yaw zero.
@@ -158,20 +165,14 @@ std::vector<Match> FrontEnd::MatchPass(const CameraMotion& motion, const Feature
     const TrackingPyramid pb = TrackingPyramid::Build(image, options_.klt.max_level);
     TrackResult tracks =
         TrackSeeded(pa, pb, prev.features.keypoints, predictions, undistorter_, options_.klt);
-    rest = predictions;
-    for (size_t i = 0; i < rest.size(); ++i) {
-      if (tracks.outcomes[i] == TrackOutcome::kTracked) rest[i].status = PredictionStatus::kInvalid;
-    }
+    rest = PredictionsOfFailedTracks(predictions, tracks);
     guided_predictions = &rest;
     from_tracks = static_cast<int>(tracks.tracks.size());
     out = std::move(tracks.tracks);
   }
-  GridIndex grid;
-  grid.Build(ideal, camera.width, camera.height,
-             static_cast<float>(options_.guided.grid_cell_size));
-  MatchResult r = MatchGuided(*guided_predictions, prev.ideal,
-                              DescriptorView::FromMat(prev.features.descriptors), ideal, grid,
-                              DescriptorView::FromMat(features.descriptors), options_.guided);
+  MatchResult r = MatchGuided(
+      *guided_predictions, prev.ideal, DescriptorView::FromMat(prev.features.descriptors), ideal,
+      DescriptorView::FromMat(features.descriptors), camera.width, camera.height, options_.guided);
   if (options_.refine_subpixel) {
     RefineMatches(prev.image, image, prev.features.keypoints, features.keypoints, predictions,
                   camera, options_.subpixel, r.matches);
@@ -295,11 +296,7 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
   std::vector<double> depths_used;
   for (const Match& m : result.matches) {
     const cv::Point2f& ka = prev.features.keypoints[static_cast<size_t>(m.query_idx)].pt;
-    const Eigen::Vector2d pb =
-        m.refined_uv_b.allFinite()
-            ? m.refined_uv_b.cast<double>()
-            : Eigen::Vector2d(features.keypoints[static_cast<size_t>(m.train_idx)].pt.x,
-                              features.keypoints[static_cast<size_t>(m.train_idx)].pt.y);
+    const Eigen::Vector2d pb = PositionInB(m, features.keypoints);
     pixels_a.emplace_back(ka.x, ka.y);
     pixels_b.push_back(pb);
     if (prev.depth.empty()) continue;
@@ -353,11 +350,7 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
     result.from_tracks = 0;
     for (const Match& m : second) {
       const cv::Point2f& ka = prev.features.keypoints[static_cast<size_t>(m.query_idx)].pt;
-      const Eigen::Vector2d pb =
-          m.refined_uv_b.allFinite()
-              ? m.refined_uv_b.cast<double>()
-              : Eigen::Vector2d(features.keypoints[static_cast<size_t>(m.train_idx)].pt.x,
-                                features.keypoints[static_cast<size_t>(m.train_idx)].pt.y);
+      const Eigen::Vector2d pb = PositionInB(m, features.keypoints);
       const Eigen::Vector2d ia = undistorter_.ToIdeal(Eigen::Vector2d(ka.x, ka.y));
       const Eigen::Vector2d ib = undistorter_.ToIdeal(pb);
       const Eigen::Vector3d xa((ia.x() - camera.cx) / camera.fx, (ia.y() - camera.cy) / camera.fy,

@@ -325,4 +325,16 @@ MatchResult MatchFramesGuided(const PinholeCamera& camera, const CameraMotion& m
                          descriptors_b, prediction_options, matcher_options);
 }
 
+MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
+                        const std::vector<KeypointInfo>& keypoints_a,
+                        const DescriptorView& descriptors_a,
+                        const std::vector<KeypointInfo>& keypoints_b,
+                        const DescriptorView& descriptors_b, int width, int height,
+                        const GuidedMatcherOptions& options) {
+  GridIndex grid;
+  grid.Build(keypoints_b, width, height, static_cast<float>(options.grid_cell_size));
+  return MatchGuided(predictions, keypoints_a, descriptors_a, keypoints_b, grid, descriptors_b,
+                     options);
+}
+
 }  // namespace imumatch

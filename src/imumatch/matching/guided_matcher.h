@@ -65,6 +65,14 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
                         const DescriptorView& descriptors_a,
                         const std::vector<KeypointInfo>& keypoints_b, const GridIndex& grid_b,
                         const DescriptorView& descriptors_b, const GuidedMatcherOptions& options);
+// The same with the grid over frame B's keypoints (ideal pixels of a width x height camera) built
+// here, for callers that match frame B once.
+MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
+                        const std::vector<KeypointInfo>& keypoints_a,
+                        const DescriptorView& descriptors_a,
+                        const std::vector<KeypointInfo>& keypoints_b,
+                        const DescriptorView& descriptors_b, int width, int height,
+                        const GuidedMatcherOptions& options);
 
 // The whole pipeline for one frame pair: depth lookup in A (depth_a may be empty: no depth),
 // keypoints mapped to ideal pixels, prediction, grid over B, matching. Keypoints as OpenCV gives

@@ -432,4 +432,16 @@ TrackResult TrackOpenCvLk(const cv::Mat& gray_a, const cv::Mat& gray_b,
   return result;
 }
 
+std::vector<KeypointPrediction> PredictionsOfFailedTracks(
+    const std::vector<KeypointPrediction>& predictions, const TrackResult& tracks) {
+  IMUMATCH_CHECK(tracks.outcomes.size() == predictions.size(),
+                 tracks.outcomes.size()
+                     << " track outcomes for " << predictions.size() << " predictions");
+  std::vector<KeypointPrediction> rest = predictions;
+  for (size_t i = 0; i < rest.size(); ++i) {
+    if (tracks.outcomes[i] == TrackOutcome::kTracked) rest[i].status = PredictionStatus::kInvalid;
+  }
+  return rest;
+}
+
 }  // namespace imumatch

@@ -119,4 +119,9 @@ TrackResult TrackSeeded(const TrackingPyramid& a, const TrackingPyramid& b,
 TrackResult TrackOpenCvLk(const cv::Mat& gray_a, const cv::Mat& gray_b,
                           const std::vector<cv::KeyPoint>& keypoints_a, const KltOptions& options);
 
+// The hybrid's fallback: the predictions with every tracked keypoint's marked kInvalid, so that
+// guided matching only looks for the keypoints whose track failed.
+std::vector<KeypointPrediction> PredictionsOfFailedTracks(
+    const std::vector<KeypointPrediction>& predictions, const TrackResult& tracks);
+
 }  // namespace imumatch

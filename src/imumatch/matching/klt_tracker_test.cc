@@ -73,6 +73,22 @@ KeypointPrediction WithDepth(const Eigen::Vector2d& truth, const Eigen::Vector2d
   return p;
 }
 
+// A prediction without depth: the segment along x from `before` px before the truth to `after`
+// px past it (the point at infinity), capsule radius 3 px.
+KeypointPrediction AlongX(const Eigen::Vector2f& truth, float before, float after) {
+  KeypointPrediction p;
+  p.status = PredictionStatus::kWithoutDepth;
+  p.segment_start = truth + Eigen::Vector2f(-before, 0.0f);
+  p.segment_end = truth + Eigen::Vector2f(after, 0.0f);
+  p.uv = p.segment_end;
+  p.radius = 3.0f;
+  p.min_x = p.segment_start.x() - 3.0f;
+  p.max_x = p.segment_end.x() + 3.0f;
+  p.min_y = truth.y() - 3.0f;
+  p.max_y = truth.y() + 3.0f;
+  return p;
+}
+
 std::vector<KeypointPrediction> Predictions(const Warped& w, const std::vector<cv::KeyPoint>& kps,
                                             const Eigen::Vector2d& error, float half) {
   std::vector<KeypointPrediction> out;
@@ -157,17 +173,7 @@ TEST(KltTrackerTest, WithoutDepthTheEpipolarSegmentSeedsTheTrack) {
     // The segment runs along x through the truth, 60 px long, the point at infinity 10 px past
     // the truth and the near end 50 px before it; capsule radius 3 px.
     const Eigen::Vector2f truth = w.Map(Eigen::Vector2d(k.pt.x, k.pt.y)).cast<float>();
-    KeypointPrediction p;
-    p.status = PredictionStatus::kWithoutDepth;
-    p.segment_start = truth + Eigen::Vector2f(-50.0f, 0.0f);
-    p.segment_end = truth + Eigen::Vector2f(10.0f, 0.0f);
-    p.uv = p.segment_end;
-    p.radius = 3.0f;
-    p.min_x = p.segment_start.x() - 3.0f;
-    p.max_x = p.segment_end.x() + 3.0f;
-    p.min_y = truth.y() - 3.0f;
-    p.max_y = truth.y() + 3.0f;
-    preds.push_back(p);
+    preds.push_back(AlongX(truth, 50.0f, 10.0f));
   }
   const auto pa = TrackingPyramid::Build(a, 3), pb = TrackingPyramid::Build(w.b, 3);
   const TrackResult r = TrackSeeded(pa, pb, kps, preds, Undistorter(), KltOptions());
@@ -188,17 +194,7 @@ TEST(KltTrackerTest, RepeatedTextureAlongTheSegmentIsAmbiguous) {
   std::vector<KeypointPrediction> preds;
   for (const cv::KeyPoint& k : kps) {
     const Eigen::Vector2f truth = w.Map(Eigen::Vector2d(k.pt.x, k.pt.y)).cast<float>();
-    KeypointPrediction p;
-    p.status = PredictionStatus::kWithoutDepth;
-    p.segment_start = truth + Eigen::Vector2f(-30.0f, 0.0f);
-    p.segment_end = truth + Eigen::Vector2f(30.0f, 0.0f);
-    p.uv = p.segment_end;
-    p.radius = 3.0f;
-    p.min_x = p.segment_start.x() - 3.0f;
-    p.max_x = p.segment_end.x() + 3.0f;
-    p.min_y = truth.y() - 3.0f;
-    p.max_y = truth.y() + 3.0f;
-    preds.push_back(p);
+    preds.push_back(AlongX(truth, 30.0f, 30.0f));
   }
   const auto pa = TrackingPyramid::Build(a, 3), pb = TrackingPyramid::Build(w.b, 3);
   KltOptions options;

@@ -349,17 +349,12 @@ void BM_Hybrid(benchmark::State& state) {
         TrackingPyramid::Build(GetFrames().gray_b, KltOptions().max_level);
     TrackResult t =
         TrackSeeded(in.pyr_a, pyr_b, s.kps_a, in.predictions, in.undistorter, KltOptions());
-    std::vector<KeypointPrediction> rest = in.predictions;
-    for (size_t i = 0; i < rest.size(); ++i) {
-      if (t.outcomes[i] == TrackOutcome::kTracked) rest[i].status = PredictionStatus::kInvalid;
-    }
     std::vector<KeypointInfo> ideal_b;
     ToIdealKeypointInfos(s.kps_b, in.undistorter, &ideal_b);
-    GridIndex grid;
-    grid.Build(ideal_b, camera.width, camera.height,
-               static_cast<float>(GuidedMatcherOptions().grid_cell_size));
-    MatchResult r = MatchGuided(rest, in.ideal_a, DescriptorView::FromMat(s.desc_a), ideal_b, grid,
-                                DescriptorView::FromMat(s.desc_b), GuidedMatcherOptions());
+    MatchResult r =
+        MatchGuided(PredictionsOfFailedTracks(in.predictions, t), in.ideal_a,
+                    DescriptorView::FromMat(s.desc_a), ideal_b, DescriptorView::FromMat(s.desc_b),
+                    camera.width, camera.height, GuidedMatcherOptions());
     RefineMatches(GetFrames().gray_a, GetFrames().gray_b, s.kps_a, s.kps_b, in.predictions, camera,
                   SubpixelOptions(), r.matches);
     matches = t.tracks.size() + r.matches.size();
