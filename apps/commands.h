@@ -1,5 +1,9 @@
 #pragma once
 
+#include <cstddef>
+#include <functional>
+#include <string>
+
 #include <CLI/CLI.hpp>
 
 namespace imumatch::apps {
@@ -12,5 +16,11 @@ void AddImuCommand(CLI::App& app);    // imu_command.cc
 void AddEvalCommand(CLI::App& app);   // eval_command.cc
 void AddDemoCommand(CLI::App& app);   // eval_command.cc
 void AddTrackCommand(CLI::App& app);  // track_command.cc
+
+// A one-line progress bar on stderr when forced or when stderr is a TTY (and total >= 10):
+// "<label> [###...] done/total <unit>, elapsed, eta". nullptr when off. eval_command.cc.
+std::function<void(size_t, size_t)> MakeProgress(bool forced, size_t total,
+                                                 const std::string& label,
+                                                 const std::string& unit = "pairs");
 
 }  // namespace imumatch::apps

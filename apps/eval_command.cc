@@ -165,25 +165,6 @@ EvaluationOptions MakeOptions(const CommonArgs& a) {
   return o;
 }
 
-// A one-line progress bar on stderr.
-std::function<void(size_t, size_t)> MakeProgress(bool forced, size_t total,
-                                                 const std::string& label) {
-  if (!(forced || (isatty(fileno(stderr)) && total >= 10))) return nullptr;
-  const auto start = std::chrono::steady_clock::now();
-  return [start, label](size_t done, size_t n) {
-    const double elapsed =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const int width = 30;
-    const int filled = n > 0 ? static_cast<int>(width * done / n) : width;
-    const double eta = done > 0 ? elapsed / done * (n - done) : 0.0;
-    std::fprintf(stderr, "\r%s [%s%s] %zu/%zu pairs, %.0f s, eta %.0f s ", label.c_str(),
-                 std::string(filled, '#').c_str(), std::string(width - filled, '.').c_str(), done,
-                 n, elapsed, eta);
-    if (done == n) std::fprintf(stderr, "\n");
-    std::fflush(stderr);
-  };
-}
-
 std::string Join(const std::vector<std::string>& v) {
   std::string out;
   for (const auto& s : v) out += (out.empty() ? "" : ",") + s;
@@ -356,6 +337,26 @@ void RunDemo(CommonArgs a, int intermediate, const std::string& motions, const s
 }
 
 }  // namespace
+
+// A one-line progress bar on stderr.
+std::function<void(size_t, size_t)> MakeProgress(bool forced, size_t total,
+                                                 const std::string& label,
+                                                 const std::string& unit) {
+  if (!(forced || (isatty(fileno(stderr)) && total >= 10))) return nullptr;
+  const auto start = std::chrono::steady_clock::now();
+  return [start, label, unit](size_t done, size_t n) {
+    const double elapsed =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const int width = 30;
+    const int filled = n > 0 ? static_cast<int>(width * done / n) : width;
+    const double eta = done > 0 ? elapsed / done * (n - done) : 0.0;
+    std::fprintf(stderr, "\r%s [%s%s] %zu/%zu %s, %.0f s, eta %.0f s ", label.c_str(),
+                 std::string(filled, '#').c_str(), std::string(width - filled, '.').c_str(), done,
+                 n, unit.c_str(), elapsed, eta);
+    if (done == n) std::fprintf(stderr, "\n");
+    std::fflush(stderr);
+  };
+}
 
 void AddEvalCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(

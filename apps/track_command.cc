@@ -1,9 +1,7 @@
 // imumatch track: the front end on a recording, no ground truth given to it. Writes the
 // per-frame CSV, the trajectory in TUM format, a report and match images; judges the matches and
 // the trajectory when the dataset has ground truth.
-#include <unistd.h>
-
-#include <chrono>
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -70,18 +68,10 @@ void RunTrackCommand(const TrackArgs& a) {
   const EvalSource source = MakeDiskSource(LoadDataset(a.path, dopts));
   std::cerr << "imumatch track: " << source.dataset.name << " (" << source.dataset.frames.size()
             << " frames); IMU: " << source.dataset.imu_source_note << "\n";
-  if (a.progress || isatty(fileno(stderr))) {
-    const auto start = std::chrono::steady_clock::now();
-    o.progress = [start](size_t done, size_t n) {
-      const double s =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      const int width = 30, filled = n > 0 ? static_cast<int>(width * done / n) : width;
-      std::fprintf(stderr, "\rtrack [%s%s] %zu/%zu frames, %.0f s ",
-                   std::string(filled, '#').c_str(), std::string(width - filled, '.').c_str(), done,
-                   n, s);
-      if (done == n) std::fprintf(stderr, "\n");
-    };
-  }
+  const size_t first = std::min(a.first, source.dataset.frames.size());
+  const size_t n = a.max_frames > 0 ? std::min(a.max_frames, source.dataset.frames.size() - first)
+                                    : source.dataset.frames.size() - first;
+  o.progress = MakeProgress(a.progress, n, "track", "frames");
   const TrackRunResult result = RunTrack(source, o);
   const std::string report = TrackReportMarkdown(
       result, o,
