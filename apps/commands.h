@@ -17,6 +17,10 @@ void AddEvalCommand(CLI::App& app);   // eval_command.cc
 void AddDemoCommand(CLI::App& app);   // eval_command.cc
 void AddTrackCommand(CLI::App& app);  // track_command.cc
 
+// --threads N (0 = all cores): OpenCV's worker threads (feature extraction, image decoding) via
+// cv::setNumThreads; returns the count used. eval_command.cc.
+int ApplyThreads(int threads);
+
 // A one-line progress bar on stderr when forced or when stderr is a TTY (and total >= 10):
 // "<label> [###...] done/total <unit>, elapsed, eta". nullptr when off. eval_command.cc.
 std::function<void(size_t, size_t)> MakeProgress(bool forced, size_t total,

@@ -3,6 +3,7 @@
 // (demo). Prints the two tables of the seed paper as Markdown and writes CSV, JSON and PNGs.
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -14,7 +15,10 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
+
+#include <opencv2/core/utility.hpp>
 
 #include "commands.h"
 #include "imumatch/core/error.h"
@@ -59,6 +63,7 @@ struct CommonArgs {
   std::string sigma_scaling = "size";
   bool overwrite = false;
   double gain_b = 1.0;
+  int threads = 0;
 };
 
 void AddCommonOptions(CLI::App* cmd, CommonArgs& a) {
@@ -110,6 +115,11 @@ void AddCommonOptions(CLI::App* cmd, CommonArgs& a) {
                   "orientation check)");
   cmd->add_flag("--no-refine", a.no_refine,
                 "guided: do not refine matched positions to sub-pixel accuracy");
+  cmd->add_option("--threads", a.threads,
+                  "worker threads (0 = all cores); 1 also reads frames inline instead of on a "
+                  "reader thread")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1024));
   cmd->add_option("--gain-b", a.gain_b,
                   "exposure change: multiply frame B of every pair by this gain (1 = off)")
       ->capture_default_str()
@@ -161,6 +171,7 @@ EvaluationOptions MakeOptions(const CommonArgs& a) {
   }
   o.still_init_s = a.still_s;
   o.gain_b = a.gain_b;
+  if (ApplyThreads(a.threads) == 1) o.queue_capacity = 0;  // one thread: no reader thread
   o.Check();
   return o;
 }
@@ -337,6 +348,15 @@ void RunDemo(CommonArgs a, int intermediate, const std::string& motions, const s
 }
 
 }  // namespace
+
+int ApplyThreads(int threads) {
+  IMUMATCH_CHECK(threads >= 0 && threads <= 1024,
+                 "--threads must be in [0, 1024], got " << threads);
+  const int n =
+      threads > 0 ? threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  cv::setNumThreads(n);
+  return n;
+}
 
 // A one-line progress bar on stderr.
 std::function<void(size_t, size_t)> MakeProgress(bool forced, size_t total,

@@ -32,6 +32,7 @@ struct TrackArgs {
   size_t max_frames = 0;
   int images = 2;
   std::string thresholds = "1,3,8";
+  int threads = 0;
   bool progress = false;
   std::string imu_model = "euroc";
   uint64_t seed = 42;
@@ -47,6 +48,7 @@ void RunTrackCommand(const TrackArgs& a) {
   o.first_frame = a.first;
   o.max_frames = a.max_frames;
   o.keep_visuals = a.images;
+  ApplyThreads(a.threads);
   o.thresholds_px.clear();
   std::stringstream list(a.thresholds);
   for (std::string item; std::getline(list, item, ',');) {
@@ -118,6 +120,9 @@ void AddTrackCommand(CLI::App& app) {
   cmd->add_option("--images", a->images, "match images of the first N judged frames")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--threads", a->threads, "worker threads of OpenCV (0 = all cores)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1024));
   cmd->add_option("--thresholds", a->thresholds,
                   "thresholds (px) at which matches are judged when there is ground truth")
       ->capture_default_str();
