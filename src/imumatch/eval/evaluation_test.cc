@@ -7,9 +7,12 @@
 #include "imumatch/eval/summary.h"
 #include "imumatch/io/dataset.h"
 #include "imumatch/io/pose_pair.h"
+#include "imumatch/io/synthetic_io.h"
 #include "imumatch/io/trajectory_io.h"
+#include "imumatch/sim/synthetic_sequence.h"
 #include "imumatch/testing/test_data.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
@@ -218,6 +221,41 @@ TEST(EvaluationTest, InputsThatLookWrongAreWarnedAbout) {
   rec.motion_rotation_error_deg = 0.8;
   EXPECT_EQ(CheckInputsLookRight({rec, rec, rec}, true).size(), 1u);
   EXPECT_TRUE(CheckInputsLookRight({rec, rec, rec}, false).empty());  // simulated: not checked
+}
+
+// A ground truth whose timestamps are one second off: a synthetic sequence written as a TUM
+// folder (sequence.json removed), its groundtruth.txt shifted by +1 s.
+TEST(EvaluationTest, AGroundTruthShiftedByOneSecondIsWarnedAbout) {
+  namespace fs = std::filesystem;
+  SyntheticSequenceOptions so;
+  so.motion = "left30";
+  so.camera = PinholeCamera::KinectDefault().ScaledToWidth(320);
+  so.frame_rate_hz = 5.0;
+  const SyntheticSequence seq = MakeSyntheticSequence(so);
+  auto warnings = [&](const std::string& name, int64_t shift_ns) {
+    const fs::path dir = fs::temp_directory_path() / ("imumatch_eval_shift_" + name);
+    fs::remove_all(dir);
+    WriteSyntheticSequence(seq, dir.string());
+    fs::remove(dir / "sequence.json");
+    std::vector<StampedPose> gt = ReadTumTrajectory((dir / "groundtruth.txt").string());
+    for (StampedPose& p : gt) p.t_ns += shift_ns;
+    WriteTumTrajectory((dir / "groundtruth.txt").string(), gt);
+    const EvalSource source = MakeDiskSource(LoadDataset(dir.string()));
+    EvaluationOptions o;
+    o.detectors = {DetectorKind::kOrb};
+    o.methods = {MatchMethod::kBruteForce};
+    o.motion_source = MotionSource::kGroundTruth;
+    std::vector<FramePair> pairs;
+    for (size_t k = 0; k + 1 < source.dataset.frames.size(); ++k) pairs.push_back({k, k + 1});
+    return EvaluateSource(source, pairs, o).warnings;
+  };
+  auto disagrees = [](const std::vector<std::string>& w) {
+    return std::any_of(w.begin(), w.end(), [](const std::string& s) {
+      return s.find("ground truth disagrees with the images") != std::string::npos;
+    });
+  };
+  EXPECT_FALSE(disagrees(warnings("none", 0)));
+  EXPECT_TRUE(disagrees(warnings("one_second", 1'000'000'000)));
 }
 
 TEST(EvaluationTest, GyroBiasFromTheStillStartOfARealLog) {
