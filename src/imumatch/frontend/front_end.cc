@@ -212,8 +212,9 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
   auto remember = [&](const Rigid3d& world_from_cam) {
     Previous p;
     p.t_ns = frame.t_ns;
-    p.image = gray;
-    p.depth = frame.depth;
+    p.image =
+        gray.data == frame.image.data ? gray.clone() : gray;  // the caller may reuse its buffers
+    p.depth = frame.depth.clone();
     p.features = std::move(features);
     p.ideal = ideal;
     p.world_from_cam = world_from_cam;
