@@ -319,6 +319,17 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
     result.pose = FitPoseEpipolar(pixels_a, pixels_b, undistorter_, guess, options_.pose);
   }
   result.cam_from_prev = result.pose.ok ? result.pose.cam_b_from_cam_a : guess;
+  // The PnP fit's error: rms residual over sqrt(inliers), as an angle and at the median depth
+  // (the second pass's window and the velocity measurement's weight).
+  double fit_angle_sigma = 0.0, fit_translation_sigma = 0.0;
+  if (result.pose_from_depth) {
+    std::vector<double> z = depths_used;
+    std::nth_element(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(z.size() / 2), z.end());
+    const double f = 0.5 * (camera.fx + camera.fy);
+    fit_angle_sigma = 2.0 * std::max(result.pose.rms_px, 0.5) / f /
+                      std::sqrt(static_cast<double>(result.pose.inliers));
+    fit_translation_sigma = fit_angle_sigma * z[z.size() / 2];
+  }
   result.pose_ms = MsSince(t0);
 
   // Second pass: predictions from the fitted pose, windows from its residual.
@@ -327,16 +338,11 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
     CameraMotion refined = result.imu_motion;
     refined.cam_b_from_cam_a = result.pose.cam_b_from_cam_a;
     if (result.pose_from_depth) {
-      // The fit's error: rms residual over sqrt(inliers), as an angle and at the median depth.
-      std::vector<double> z = depths_used;
-      std::nth_element(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(z.size() / 2), z.end());
-      const double f = 0.5 * (camera.fx + camera.fy);
-      const double angle = 2.0 * std::max(result.pose.rms_px, 0.5) / f /
-                           std::sqrt(static_cast<double>(result.pose.inliers));
       refined.covariance.setZero();
-      refined.covariance.topLeftCorner<3, 3>().diagonal().setConstant(angle * angle);
-      const double st = angle * z[z.size() / 2];
-      refined.covariance.bottomRightCorner<3, 3>().diagonal().setConstant(st * st);
+      refined.covariance.topLeftCorner<3, 3>().diagonal().setConstant(fit_angle_sigma *
+                                                                      fit_angle_sigma);
+      refined.covariance.bottomRightCorner<3, 3>().diagonal().setConstant(fit_translation_sigma *
+                                                                          fit_translation_sigma);
     }
     std::vector<KeypointPrediction> predictions2;
     int tracks2 = 0;
@@ -404,13 +410,7 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
       const Eigen::Vector3d va =
           (world_from_imu_b.translation - pa - ra * pim.delta_position - 0.5 * g * dt * dt) / dt;
       const Eigen::Vector3d vb = va + ra * pim.delta_velocity + g * dt;
-      std::vector<double> z = depths_used;
-      std::nth_element(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(z.size() / 2), z.end());
-      const double f = 0.5 * (camera.fx + camera.fy);
-      const double st =
-          std::max(0.002, 2.0 * std::max(result.pose.rms_px, 0.5) / f * z[z.size() / 2] /
-                              std::sqrt(static_cast<double>(result.pose.inliers)));
-      const double sm = st / dt;
+      const double sm = std::max(0.002, fit_translation_sigma) / dt;
       const double wp = 1.0 / (sigma * sigma), wm = 1.0 / (sm * sm);
       v = (wp * v + wm * vb) / (wp + wm);
       sigma = std::sqrt(1.0 / (wp + wm));
