@@ -71,6 +71,7 @@ py::dict StatsDict(const MatchStats& s) {
   d["ratio_test"] = s.ratio_test;
   d["mutual"] = s.mutual;
   d["matched"] = s.matched;
+  d["points_scanned"] = s.points_scanned;
   d["distances_computed"] = s.distances_computed;
   return d;
 }

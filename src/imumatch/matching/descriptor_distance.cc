@@ -107,11 +107,78 @@ __attribute__((target("avx2,fma"))) float L2Avx2(const uint8_t* a8, const uint8_
   return sum;
 }
 
+// Gather forms: the per-pair code above inlined into a loop over the slots (same target, so the
+// same instructions and the same float results).
+__attribute__((target("popcnt"))) void HammingPopcnt32Gather(const uint8_t* a, const uint8_t* rows,
+                                                             const int* slots, int count, int,
+                                                             float* out) {
+  uint64_t q[4];
+  std::memcpy(q, a, 32);
+  for (int j = 0; j < count; ++j) {
+    const uint8_t* b = rows + static_cast<size_t>(slots[j]) * 32;
+    uint64_t r[4];
+    std::memcpy(r, b, 32);
+    out[j] =
+        static_cast<float>(__builtin_popcountll(q[0] ^ r[0]) + __builtin_popcountll(q[1] ^ r[1]) +
+                           __builtin_popcountll(q[2] ^ r[2]) + __builtin_popcountll(q[3] ^ r[3]));
+  }
+}
+__attribute__((target("popcnt"))) void HammingPopcntGather(const uint8_t* a, const uint8_t* rows,
+                                                           const int* slots, int count, int bytes,
+                                                           float* out) {
+  for (int j = 0; j < count; ++j) {
+    out[j] =
+        static_cast<float>(HammingDistance(a, rows + static_cast<size_t>(slots[j]) * bytes, bytes));
+  }
+}
+void L2Sse2Gather(const uint8_t* a, const uint8_t* rows, const int* slots, int count, int bytes,
+                  float* out) {
+  for (int j = 0; j < count; ++j) {
+    out[j] = L2Sse2(a, rows + static_cast<size_t>(slots[j]) * bytes, bytes);
+  }
+}
+__attribute__((target("avx2,fma"))) void L2Avx2Gather(const uint8_t* a, const uint8_t* rows,
+                                                      const int* slots, int count, int bytes,
+                                                      float* out) {
+  for (int j = 0; j < count; ++j) {
+    out[j] = L2Avx2(a, rows + static_cast<size_t>(slots[j]) * bytes, bytes);
+  }
+}
+
 bool HasPopcnt() { return __builtin_cpu_supports("popcnt"); }
 bool HasAvx2Fma() { return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"); }
 #endif
 
 }  // namespace
+
+namespace {
+[[maybe_unused]] void HammingPortableGather(const uint8_t* a, const uint8_t* rows, const int* slots,
+                                            int count, int bytes, float* out) {
+  for (int j = 0; j < count; ++j) {
+    out[j] = HammingPortable(a, rows + static_cast<size_t>(slots[j]) * bytes, bytes);
+  }
+}
+[[maybe_unused]] void L2PortableGather(const uint8_t* a, const uint8_t* rows, const int* slots,
+                                       int count, int bytes, float* out) {
+  for (int j = 0; j < count; ++j) {
+    out[j] = L2Portable(a, rows + static_cast<size_t>(slots[j]) * bytes, bytes);
+  }
+}
+}  // namespace
+
+DescriptorCostGatherFn SelectCostGatherFunction(DescriptorNorm norm, int bytes) {
+#if IMUMATCH_X86
+  if (norm == DescriptorNorm::kHamming) {
+    if (!HasPopcnt()) return &HammingPortableGather;
+    if (bytes == 32) return &HammingPopcnt32Gather;
+    return &HammingPopcntGather;
+  }
+  return HasAvx2Fma() ? &L2Avx2Gather : &L2Sse2Gather;
+#else
+  (void)bytes;
+  return norm == DescriptorNorm::kHamming ? &HammingPortableGather : &L2PortableGather;
+#endif
+}
 
 DescriptorCostFn SelectCostFunction(DescriptorNorm norm, int bytes) {
 #if IMUMATCH_X86

@@ -64,6 +64,13 @@ inline float L2DistanceSquared(const float* a, const float* b, int dims) {
 // (__builtin_cpu_supports); otherwise portable code runs. Nothing here needs -march flags.
 using DescriptorCostFn = float (*)(const uint8_t* a, const uint8_t* b, int bytes);
 DescriptorCostFn SelectCostFunction(DescriptorNorm norm, int bytes);
+// One query against several rows of a packed array (row s at rows + s * bytes): out[j] = the cost
+// of a against row slots[j], for j < count. The guided matcher's window candidates in one call:
+// the query is loaded once and no call is made per pair. Same values, bit for bit, as the function
+// SelectCostFunction returns for the same norm and length.
+using DescriptorCostGatherFn = void (*)(const uint8_t* a, const uint8_t* rows, const int* slots,
+                                        int count, int bytes, float* out);
+DescriptorCostGatherFn SelectCostGatherFunction(DescriptorNorm norm, int bytes);
 
 // Cost <-> distance as reported (and as OpenCV reports it): identity for Hamming, sqrt for L2.
 inline float CostToDistance(DescriptorNorm norm, float cost) {

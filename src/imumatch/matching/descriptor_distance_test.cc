@@ -68,6 +68,50 @@ TEST(DescriptorDistanceTest, L2HandComputedAndOpenCv) {
   }
 }
 
+// The gather form (one query against rows picked by slot) gives the per-pair function's values bit
+// for bit, and OpenCV's norms, for every supported length (binary 32, AKAZE's 61 padded to 64, 64
+// bytes and others; float 64 and 128 dimensions), with repeated and out-of-order slots.
+TEST(DescriptorDistanceTest, GatherEqualsPerPairForEveryLength) {
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> byte(0, 255);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  const std::vector<int> slots = {5, 0, 12, 12, 3, 19, 7};
+  for (const int bytes : {8, 24, 32, 64, 488 / 8 * 8, 64 * 4, 128 * 4}) {
+    for (const bool binary : {true, false}) {
+      if (!binary && bytes < 64 * 4) continue;
+      const DescriptorNorm norm = binary ? DescriptorNorm::kHamming : DescriptorNorm::kL2;
+      const int type = binary ? CV_8U : CV_32F;
+      const int cols = binary ? bytes : bytes / 4;
+      cv::Mat rows(20, cols, type), query(1, cols, type);
+      for (cv::Mat* m : {&rows, &query}) {
+        for (int r = 0; r < m->rows; ++r) {
+          for (int c = 0; c < cols; ++c) {
+            if (binary) {
+              m->at<uint8_t>(r, c) = static_cast<uint8_t>(byte(rng));
+            } else {
+              m->at<float>(r, c) = u(rng);
+            }
+          }
+        }
+      }
+      const DescriptorCostFn pair = SelectCostFunction(norm, bytes);
+      const DescriptorCostGatherFn gather = SelectCostGatherFunction(norm, bytes);
+      std::vector<float> out(slots.size(), -1.0f);
+      gather(query.ptr(), rows.ptr(), slots.data(), static_cast<int>(slots.size()), bytes,
+             out.data());
+      for (size_t j = 0; j < slots.size(); ++j) {
+        const float expected = pair(query.ptr(), rows.ptr(slots[j]), bytes);
+        EXPECT_EQ(out[j], expected) << bytes << " bytes, slot " << slots[j];
+        const double cv_norm =
+            cv::norm(query, rows.row(slots[j]), binary ? cv::NORM_HAMMING : cv::NORM_L2SQR);
+        EXPECT_NEAR(out[j], cv_norm, binary ? 0.0 : 1e-4 * cv_norm);
+      }
+      // No rows: nothing written.
+      gather(query.ptr(), rows.ptr(), slots.data(), 0, bytes, out.data());
+    }
+  }
+}
+
 TEST(DescriptorDistanceTest, ViewRejectsBadTypesAndMismatches) {
   EXPECT_THROW(DescriptorView::FromMat(cv::Mat::zeros(2, 12, CV_8U)), InvalidArgument);
   EXPECT_THROW(DescriptorView::FromMat(cv::Mat::zeros(2, 8, CV_64F)), InvalidArgument);

@@ -63,6 +63,22 @@ void GridIndex::Build(const std::vector<KeypointInfo>& keypoints, int width, int
                sizeof(KeypointInfo), static_cast<int>(keypoints.size()), width, height, cell_size);
 }
 
+size_t GridIndex::CollectSlotsInCapsule(float x0, float y0, float x1, float y1, float radius,
+                                        float min_x, float min_y, float max_x, float max_y,
+                                        std::vector<int>* out) const {
+  out->clear();
+  size_t scanned = 0;
+  ForEachRunInCapsule(x0, y0, x1, y1, radius, min_x, min_y, max_x, max_y,
+                      [&](int begin, int end, float lo_x, float hi_x, float lo_y, float hi_y) {
+                        scanned += static_cast<size_t>(end - begin);
+                        for (int k = begin; k < end; ++k) {
+                          const float x = xy_[2 * k], y = xy_[2 * k + 1];
+                          if (x >= lo_x && x <= hi_x && y >= lo_y && y <= hi_y) out->push_back(k);
+                        }
+                      });
+  return scanned;
+}
+
 std::vector<int> GridIndex::QueryBox(float min_x, float min_y, float max_x, float max_y) const {
   std::vector<int> out;
   ForEachInBox(min_x, min_y, max_x, max_y, [&out](int i, float, float) { out.push_back(i); });

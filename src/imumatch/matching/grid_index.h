@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "imumatch/matching/match_types.h"
@@ -58,17 +59,82 @@ class GridIndex {
   }
 
   // Replaces *out with the indices of the points inside the closed box (in grid order). The
-  // buffer's capacity is reused across calls; the box test is branch-free.
-  void CollectInBox(float min_x, float min_y, float max_x, float max_y,
-                    std::vector<int>* out) const {
-    Collect<true>(min_x, min_y, max_x, max_y, out);
+  // buffer's capacity is reused across calls; the box test is branch-free. Returns the number of
+  // points read (the work done: the points of every cell the box touches).
+  size_t CollectInBox(float min_x, float min_y, float max_x, float max_y,
+                      std::vector<int>* out) const {
+    return Collect<true>(min_x, min_y, max_x, max_y, out);
   }
   // The same, but returns slots: positions in the grid's cell-sorted order (slot_index(slot) is the
   // point's original index). Data copied into slot order is read contiguously by window queries.
-  void CollectSlotsInBox(float min_x, float min_y, float max_x, float max_y,
-                         std::vector<int>* out) const {
-    Collect<false>(min_x, min_y, max_x, max_y, out);
+  size_t CollectSlotsInBox(float min_x, float min_y, float max_x, float max_y,
+                           std::vector<int>* out) const {
+    return Collect<false>(min_x, min_y, max_x, max_y, out);
   }
+  // Slots of the points inside the capsule {p : distance(p, segment (x0,y0)-(x1,y1)) <= radius}
+  // clipped to the closed box, as a superset: each cell row is scanned only over the x-range the
+  // capsule covers within that row's band, so a long oblique segment reads O(length x radius)
+  // points instead of its bounding box's (the caller applies the exact capsule test). Returns the
+  // number of points read.
+  size_t CollectSlotsInCapsule(float x0, float y0, float x1, float y1, float radius, float min_x,
+                               float min_y, float max_x, float max_y, std::vector<int>* out) const;
+  // The slot runs a window query reads: for each cell row the box (or capsule) touches, calls
+  // f(begin, end, min_x, max_x, min_y, max_y) with the contiguous slots [begin, end) of the cells
+  // it spans in that row and the closed box that the row's points must lie in (a superset test:
+  // the capsule's exact test is the caller's). Callers that keep data in slot order then test the
+  // slots of a run in one vectorisable loop.
+  template <typename F>
+  void ForEachRunInBox(float min_x, float min_y, float max_x, float max_y, F&& f) const {
+    if (index_.empty() || !(min_x <= max_x) || !(min_y <= max_y)) return;
+    const int c0 = CellCol(min_x), c1 = CellCol(max_x);
+    for (int r = CellRow(min_y), r1 = CellRow(max_y); r <= r1; ++r) {
+      const int begin = cell_start_[r * cols_ + c0], end = cell_start_[r * cols_ + c1 + 1];
+      if (begin < end) f(begin, end, min_x, max_x, min_y, max_y);
+    }
+  }
+  // Each cell row is read only over the x-range the capsule {p : distance(p, segment (x0,y0)-
+  // (x1,y1)) <= radius} covers within that row's band (clipped to the box), so a long oblique
+  // segment reads O(length x radius) points instead of its bounding box's.
+  template <typename F>
+  void ForEachRunInCapsule(float x0, float y0, float x1, float y1, float radius, float min_x,
+                           float min_y, float max_x, float max_y, F&& f) const {
+    if (index_.empty() || !(radius >= 0.0f) || !std::isfinite(x0) || !std::isfinite(y0) ||
+        !std::isfinite(x1) || !std::isfinite(y1)) {
+      return;
+    }
+    min_x = std::max(min_x, std::min(x0, x1) - radius);
+    max_x = std::min(max_x, std::max(x0, x1) + radius);
+    min_y = std::max(min_y, std::min(y0, y1) - radius);
+    max_y = std::min(max_y, std::max(y0, y1) + radius);
+    if (!(min_x <= max_x) || !(min_y <= max_y)) return;
+    const float dx = x1 - x0, dy = y1 - y0;
+    const float inf = std::numeric_limits<float>::infinity();
+    for (int r = CellRow(min_y), r1 = CellRow(max_y); r <= r1; ++r) {
+      // The row's band of y (border rows also hold the points beyond the grid), within the box.
+      const float band_lo = std::max(min_y, r == 0 ? -inf : static_cast<float>(r) * cell_size_);
+      const float band_hi =
+          std::min(max_y, r == rows_ - 1 ? inf : static_cast<float>(r + 1) * cell_size_);
+      if (!(band_lo <= band_hi)) continue;
+      // Points of the capsule with y in the band lie within radius of segment points with y in
+      // [band_lo - radius, band_hi + radius]: the x-range of those, widened by the radius.
+      float s_lo = 0.0f, s_hi = 1.0f;
+      if (dy != 0.0f) {
+        const float a = (band_lo - radius - y0) / dy, b = (band_hi + radius - y0) / dy;
+        s_lo = std::max(0.0f, std::min(a, b));
+        s_hi = std::min(1.0f, std::max(a, b));
+        if (!(s_lo <= s_hi)) continue;
+      }
+      const float xa = x0 + s_lo * dx, xb = x0 + s_hi * dx;
+      const float row_min_x = std::max(min_x, std::min(xa, xb) - radius);
+      const float row_max_x = std::min(max_x, std::max(xa, xb) + radius);
+      if (!(row_min_x <= row_max_x)) continue;
+      const int begin = cell_start_[r * cols_ + CellCol(row_min_x)];
+      const int end = cell_start_[r * cols_ + CellCol(row_max_x) + 1];
+      if (begin < end) f(begin, end, row_min_x, row_max_x, band_lo, band_hi);
+    }
+  }
+  // The grid's coordinates in slot order (x of slot s at 2 s, y at 2 s + 1).
+  const float* slot_xy() const { return xy_.data(); }
   int slot_index(int slot) const { return index_[slot]; }
   // Row-major cell id of a position (clamped into the grid).
   int CellOf(float x, float y) const { return CellRow(y) * cols_ + CellCol(x); }
@@ -79,9 +145,9 @@ class GridIndex {
 
  private:
   template <bool kOriginalIndex>
-  void Collect(float min_x, float min_y, float max_x, float max_y, std::vector<int>* out) const {
+  size_t Collect(float min_x, float min_y, float max_x, float max_y, std::vector<int>* out) const {
     out->clear();
-    if (index_.empty() || !(min_x <= max_x) || !(min_y <= max_y)) return;
+    if (index_.empty() || !(min_x <= max_x) || !(min_y <= max_y)) return 0;
     const int c0 = CellCol(min_x), c1 = CellCol(max_x);
     const int r0 = CellRow(min_y), r1 = CellRow(max_y);
     size_t scanned = 0;
@@ -101,6 +167,7 @@ class GridIndex {
       }
     }
     out->resize(count);
+    return scanned;
   }
 
   void BuildStrided(const unsigned char* xs, const unsigned char* ys, size_t stride, int n,

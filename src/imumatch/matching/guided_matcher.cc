@@ -34,10 +34,57 @@ float SquaredNorm(const uint8_t* row, int bytes) {
   return s;
 }
 
-// Angle difference wrapped to [-180, 180).
-float WrapDegrees(float a) {
-  if (a >= 180.0f || a < -180.0f) a -= 360.0f * std::floor((a + 180.0f) / 360.0f);
-  return a;
+// An angle in [0, 360) (NaN stays NaN).
+float NormalizeDegrees(float a) {
+  if (a >= 360.0f || a < 0.0f) a -= 360.0f * std::floor(a / 360.0f);
+  return a < 360.0f ? a : 0.0f;  // a tiny negative a rounds up to 360
+}
+
+// The tests of one query's candidates: inside the window (box, and capsule for a prediction
+// without depth), orientation and size consistent with the prediction.
+struct CandidateTest {
+  float expected_angle, orient_tol, size_lo, size_hi;
+  bool check_angle, check_size;
+  float start_x, start_y, dx, dy, r2;  // the capsule's segment and squared radius
+};
+
+// Tests a run of candidates (slots begin..end-1 of arrays in slot order) and appends those to be
+// compared to kept_slot / kept_consistent (capacity for end - begin more). No branch per
+// candidate (about half of them fail the box test; a branch would mispredict a lot). Returns flags
+// of the run: bit 0 some candidate inside the window, bit 1 some inside with a consistent angle.
+// Angles are in [0, 360) or -1 (no angle), sizes > 0 or 0 (no size).
+template <bool kCapsule>
+int TestRun(const CandidateTest& t, const float* xs, const float* ys, const float* angles,
+            const float* sizes, int begin, int end, float lo_x, float hi_x, float lo_y, float hi_y,
+            int keep_inconsistent, int* kept_slot, uint8_t* kept_consistent, int* kept) {
+  const float len2 = t.dx * t.dx + t.dy * t.dy;
+  const float denominator = len2 > 0.0f ? len2 : 1.0f;  // a point segment: dot = 0, s = 0
+  const int no_angle_check = !t.check_angle, no_size_check = !t.check_size;
+  int n = *kept, any = 0;
+  for (int k = begin; k < end; ++k) {
+    const float x = xs[k], y = ys[k];
+    int in = (x >= lo_x) & (x <= hi_x) & (y >= lo_y) & (y <= hi_y);
+    if constexpr (kCapsule) {
+      const float px = x - t.start_x, py = y - t.start_y;
+      const float s = std::min(std::max((px * t.dx + py * t.dy) / denominator, 0.0f), 1.0f);
+      const float ex = px - s * t.dx, ey = py - s * t.dy;
+      in &= static_cast<int>(ex * ex + ey * ey <= t.r2);
+    }
+    const float a = angles[k];
+    const float d = std::fabs(a - t.expected_angle);
+    const int angle_ok =
+        no_angle_check | (a < 0.0f) | static_cast<int>(std::min(d, 360.0f - d) <= t.orient_tol);
+    const float size = sizes[k];
+    const int size_ok =
+        no_size_check | (size <= 0.0f) | ((size >= t.size_lo) & (size <= t.size_hi));
+    const int consistent = angle_ok & size_ok;
+    any |= in | ((in & angle_ok) << 1);
+    kept_slot[n] = k;
+    kept_consistent[n] = static_cast<uint8_t>(consistent);
+    n += in & (consistent | keep_inconsistent);
+  }
+  *kept = n;
+  return any;
 }
 
 }  // namespace
@@ -68,7 +115,6 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
   const DescriptorNorm norm = descriptors_a.norm;
   const bool l2 = norm == DescriptorNorm::kL2;
   const int bytes = descriptors_a.bytes;
-  const DescriptorCostFn cost_fn = m > 0 ? SelectCostFunction(norm, bytes) : nullptr;
   const float ratio_cost = static_cast<float>(l2 ? options.ratio * options.ratio : options.ratio);
   const bool use_ratio = options.ratio < 1.0;
   const float max_hamming = static_cast<float>(options.max_hamming_fraction * bytes * 8);
@@ -78,13 +124,21 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
   const float inf = std::numeric_limits<float>::infinity();
   const bool rivals_all = options.inconsistent_candidates_in_ratio;
 
-  // B's keypoints and descriptors copied into the grid's cell order: a window's candidates are then
-  // read from a few contiguous runs instead of scattered rows (O(m) copy, a few us per 1000).
-  std::vector<KeypointInfo> info_b(m);
+  // B's keypoints (as arrays of x, y, angle, size) and descriptors copied into the grid's cell
+  // order: a window's candidates are then contiguous runs of slots, tested in vectorised loops
+  // (O(m) copy, a few us per 1000). Angles are normalised into [0, 360) once here (no angle: -1),
+  // sizes that are not positive numbers become 0 (no size check), as the tests below expect.
+  std::vector<float> b_x(m), b_y(m), b_angle(m), b_size(m);
   std::vector<uint8_t> desc_b(static_cast<size_t>(m) * bytes);
   for (int k = 0; k < m; ++k) {
     const int j = grid_b.slot_index(k);
-    info_b[k] = keypoints_b[j];
+    const KeypointInfo& kb = keypoints_b[j];
+    b_x[k] = kb.x;
+    b_y[k] = kb.y;
+    b_angle[k] = kb.angle_deg >= 0.0f && std::isfinite(kb.angle_deg)
+                     ? NormalizeDegrees(kb.angle_deg)
+                     : -1.0f;
+    b_size[k] = kb.size > 0.0f ? kb.size : 0.0f;
     std::memcpy(desc_b.data() + static_cast<size_t>(k) * bytes, descriptors_b.Row(j), bytes);
   }
   const bool mutual = options.mutual;
@@ -94,107 +148,177 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
     reverse_cost.assign(m, inf);
     reverse_idx.assign(m, -1);
   }
-  std::vector<int> best_slot(n, -1);  // accepted (before the mutual check) matches, by query
-  std::vector<float> best_cost(n), second_cost(n);
-  std::vector<int> candidates;
-  candidates.reserve(256);
-  struct Scored {
-    float cost;
-    int k;
-    bool consistent;
-  };
-  std::vector<Scored> scored;
-  scored.reserve(256);
+  const DescriptorCostGatherFn cost_gather =
+      m > 0 ? SelectCostGatherFunction(norm, bytes) : nullptr;
+  std::vector<int> kept_slot(256);
+  std::vector<uint8_t> kept_consistent(256);
+  std::vector<float> kept_cost(256);
+  const int rivals_all_bit = rivals_all ? 1 : 0;
   const bool dedup = options.duplicate_radius_px > 0.0;
   const float dup_radius = static_cast<float>(options.duplicate_radius_px);
   const float ref_b = ReferenceKeypointSize(keypoints_b);
 
-  for (int i = 0; i < n; ++i) {
-    const KeypointPrediction& p = predictions[i];
-    switch (p.status) {
-      case PredictionStatus::kWithDepth:
-        ++stats.predicted_with_depth;
-        break;
-      case PredictionStatus::kWithoutDepth:
-        ++stats.predicted_without_depth;
-        break;
-      case PredictionStatus::kBehindCamera:
-        ++stats.behind_camera;
-        result.outcomes[i] = QueryOutcome::kBehindCamera;
-        continue;
-      case PredictionStatus::kOutsideImage:
-        ++stats.outside_image;
-        result.outcomes[i] = QueryOutcome::kOutsideImage;
-        continue;
-      case PredictionStatus::kInvalid:
-        ++stats.no_prediction;
-        result.outcomes[i] = QueryOutcome::kNoPrediction;
-        continue;
+  // The queries with a window are visited in the grid's cell order of their windows (a counting
+  // sort, O(n + cells)): consecutive windows then read neighbouring slots of B, and the per-query
+  // results are written in visiting order, so the search touches B's arrays almost as a stream.
+  // Only the query's own records (prediction, keypoint, descriptor) are read out of order, and
+  // they are prefetched a few queries ahead. In A's order, every window would read a random part
+  // of B: a cache miss per candidate once B's arrays outgrow L2 (thousands of keypoints). The
+  // result does not depend on the order (the mutual check breaks ties by the lower query index).
+  std::vector<int> order;               // visiting position -> query index
+  std::vector<int> position_of(n, -1);  // query index -> visiting position (-1: no window)
+  {
+    const int cells = grid_b.num_cells();
+    std::vector<int> start(static_cast<size_t>(cells) + 1, 0), cell(n, -1);
+    for (int i = 0; i < n; ++i) {
+      const KeypointPrediction& p = predictions[i];
+      switch (p.status) {
+        case PredictionStatus::kWithDepth:
+          ++stats.predicted_with_depth;
+          break;
+        case PredictionStatus::kWithoutDepth:
+          ++stats.predicted_without_depth;
+          break;
+        case PredictionStatus::kBehindCamera:
+          ++stats.behind_camera;
+          result.outcomes[i] = QueryOutcome::kBehindCamera;
+          continue;
+        case PredictionStatus::kOutsideImage:
+          ++stats.outside_image;
+          result.outcomes[i] = QueryOutcome::kOutsideImage;
+          continue;
+        case PredictionStatus::kInvalid:
+          ++stats.no_prediction;
+          result.outcomes[i] = QueryOutcome::kNoPrediction;
+          continue;
+      }
+      cell[i] = grid_b.CellOf(0.5f * (p.min_x + p.max_x), 0.5f * (p.min_y + p.max_y));
+      ++start[cell[i] + 1];
     }
+    for (int c = 0; c < cells; ++c) start[c + 1] += start[c];
+    order.resize(start[cells]);
+    for (int i = 0; i < n; ++i) {
+      if (cell[i] < 0) continue;
+      position_of[i] = start[cell[i]]++;
+      order[position_of[i]] = i;
+    }
+  }
+  const int visited = static_cast<int>(order.size());
+  // Per visiting position: the accepted candidate's slot (-1: none), its cost, the runner-up's.
+  std::vector<int> accepted_slot(visited, -1);
+  std::vector<float> accepted_cost(visited), accepted_second(visited);
+  constexpr int kPrefetchAhead = 6;
+
+  for (int q = 0; q < visited; ++q) {
+    if (q + kPrefetchAhead < visited) {
+      const int ahead = order[q + kPrefetchAhead];
+      const char* pa = reinterpret_cast<const char*>(&predictions[ahead]);
+      __builtin_prefetch(pa);
+      __builtin_prefetch(pa + sizeof(KeypointPrediction) - 1);
+      __builtin_prefetch(&keypoints_a[ahead]);
+      const uint8_t* row = descriptors_a.Row(ahead);
+      for (int b = 0; b < bytes; b += 64) __builtin_prefetch(row + b);
+    }
+    const int i = order[q];
+    const KeypointPrediction& p = predictions[i];
     const KeypointInfo& ka = keypoints_a[i];
     const uint8_t* da = descriptors_a.Row(i);
-    const bool check_angle = options.check_orientation && ka.angle_deg >= 0.0f;
+    const bool capsule = p.status == PredictionStatus::kWithoutDepth;
+    const float expected_raw = ka.angle_deg + p.angle_change_deg;
+    const bool check_angle =
+        options.check_orientation && ka.angle_deg >= 0.0f && std::isfinite(expected_raw);
     const bool check_size = options.check_scale && ka.size > 0.0f;
-    const float expected_angle = ka.angle_deg + p.angle_change_deg;
+    const float expected_angle = NormalizeDegrees(expected_raw);
     const float size_lo = check_size ? ka.size * p.scale_min / scale_tol : 0.0f;
     const float size_hi = check_size ? ka.size * p.scale_max * scale_tol : 0.0f;
-    const bool capsule = p.status == PredictionStatus::kWithoutDepth;
     const float r2 = p.radius * p.radius;
 
+    // Pass 1: the candidates inside the window, with their consistency with the predicted
+    // rotation and scale; those that will be compared are packed into kept_* (each run of slots the
+    // window spans in a cell row, tested without a branch per candidate).
     bool any_in_window = false, any_angle_ok = false;
-    float best = inf, second = inf, rival = inf;
-    int best_k = -1;
-    int64_t evaluated = 0;
-    scored.clear();
-    grid_b.CollectSlotsInBox(p.min_x, p.min_y, p.max_x, p.max_y, &candidates);
-    for (const int k : candidates) {
-      const KeypointInfo& kb = info_b[k];
-      if (capsule && p.SegmentDistanceSquared(kb.x, kb.y) > r2) continue;
-      any_in_window = true;
-      const bool angle_ok = !(check_angle && kb.angle_deg >= 0.0f &&
-                              std::fabs(WrapDegrees(kb.angle_deg - expected_angle)) > orient_tol);
-      const bool size_ok =
-          !(check_size && kb.size > 0.0f && (kb.size < size_lo || kb.size > size_hi));
-      if (angle_ok) any_angle_ok = true;
-      const bool consistent = angle_ok && size_ok;
-      if (!consistent && !rivals_all) continue;
-      // An inconsistent candidate cannot be the match but still competes in the ratio test.
-      const float c = cost_fn(da, desc_b.data() + static_cast<size_t>(k) * bytes, bytes);
-      ++evaluated;
-      if (dedup) scored.push_back({c, k, consistent});
-      if (!consistent) {
-        if (c < rival) rival = c;
-        continue;
+    int kept = 0;
+    const CandidateTest test{expected_angle,
+                             orient_tol,
+                             size_lo,
+                             size_hi,
+                             check_angle,
+                             check_size,
+                             p.segment_start.x(),
+                             p.segment_start.y(),
+                             p.segment_end.x() - p.segment_start.x(),
+                             p.segment_end.y() - p.segment_start.y(),
+                             r2};
+    const auto run = [&](int begin, int end, float lo_x, float hi_x, float lo_y, float hi_y) {
+      const int len = end - begin;
+      stats.points_scanned += len;
+      if (kept_slot.size() < static_cast<size_t>(kept + len)) {
+        const size_t size = 2 * static_cast<size_t>(kept + len);
+        kept_slot.resize(size);
+        kept_consistent.resize(size);
+        kept_cost.resize(size);
       }
-      if (c < second) {
-        if (c < best) {
-          second = best;
-          best = c;
-          best_k = k;
-        } else {
-          second = c;
+      const int any =
+          capsule ? TestRun<true>(test, b_x.data(), b_y.data(), b_angle.data(), b_size.data(),
+                                  begin, end, lo_x, hi_x, lo_y, hi_y, rivals_all_bit,
+                                  kept_slot.data(), kept_consistent.data(), &kept)
+                  : TestRun<false>(test, b_x.data(), b_y.data(), b_angle.data(), b_size.data(),
+                                   begin, end, lo_x, hi_x, lo_y, hi_y, rivals_all_bit,
+                                   kept_slot.data(), kept_consistent.data(), &kept);
+      any_in_window |= (any & 1) != 0;
+      any_angle_ok |= (any & 2) != 0;
+    };
+    if (capsule) {
+      grid_b.ForEachRunInCapsule(p.segment_start.x(), p.segment_start.y(), p.segment_end.x(),
+                                 p.segment_end.y(), p.radius, p.min_x, p.min_y, p.max_x, p.max_y,
+                                 run);
+    } else {
+      grid_b.ForEachRunInBox(p.min_x, p.min_y, p.max_x, p.max_y, run);
+    }
+    // Pass 2: the descriptor costs of the kept candidates, in one call.
+    if (kept > 0) cost_gather(da, desc_b.data(), kept_slot.data(), kept, bytes, kept_cost.data());
+    const int64_t evaluated = kept;
+    // Pass 3: the best consistent candidate (the first of equal costs, in grid order), and the
+    // reverse bests of the mutual check over the consistent candidates.
+    float best = inf;
+    int best_j = -1;
+    for (int j = 0; j < kept; ++j) {
+      const float c = kept_consistent[j] ? kept_cost[j] : inf;
+      best_j = c < best ? j : best_j;
+      best = std::min(best, c);
+    }
+    if (mutual) {
+      for (int j = 0; j < kept; ++j) {
+        const int k = kept_slot[j];
+        const float c = kept_cost[j];
+        if (kept_consistent[j] &&
+            (c < reverse_cost[k] || (c == reverse_cost[k] && i < reverse_idx[k]))) {
+          reverse_cost[k] = c;
+          reverse_idx[k] = i;
         }
       }
-      if (mutual && c < reverse_cost[k]) {
-        reverse_cost[k] = c;
-        reverse_idx[k] = i;
-      }
     }
-    if (dedup && best_k >= 0) {
-      // Rivals at the best candidate's own place are the same feature detected twice (another
-      // pyramid level, another orientation): they do not make the match ambiguous.
-      const KeypointInfo& kbest = info_b[best_k];
-      const float scale =
-          ref_b > 0.0f && kbest.size > 0.0f ? std::max(1.0f, kbest.size / ref_b) : 1.0f;
-      const float dup2 = dup_radius * dup_radius * scale * scale;
-      second = rival = inf;
-      for (const Scored& sc : scored) {
-        if (sc.k == best_k) continue;
-        const KeypointInfo& kb = info_b[sc.k];
-        const float dx = kb.x - kbest.x, dy = kb.y - kbest.y;
-        if (dx * dx + dy * dy <= dup2) continue;
-        float& target = sc.consistent ? second : rival;
-        if (sc.cost < target) target = sc.cost;
+    const int best_k = best_j >= 0 ? kept_slot[best_j] : -1;
+    // Pass 4: the runner-up (consistent) and the best rival (inconsistent) other than the best.
+    // Rivals at the best candidate's own place are the same feature detected twice (another
+    // pyramid level, another orientation): they do not make the match ambiguous.
+    float second = inf, rival = inf;
+    if (best_j >= 0) {
+      const float best_size = b_size[best_k];
+      float dup2 = -1.0f;  // no candidate is a duplicate
+      if (dedup) {
+        const float scale =
+            ref_b > 0.0f && best_size > 0.0f ? std::max(1.0f, best_size / ref_b) : 1.0f;
+        dup2 = dup_radius * dup_radius * scale * scale;
+      }
+      const float bx = b_x[best_k], by = b_y[best_k];
+      for (int j = 0; j < kept; ++j) {
+        const float dx = b_x[kept_slot[j]] - bx, dy = b_y[kept_slot[j]] - by;
+        const bool skip = (j == best_j) | (dx * dx + dy * dy <= dup2);
+        const float c = skip ? inf : kept_cost[j];
+        const bool consistent = kept_consistent[j];
+        second = consistent ? std::min(second, c) : second;
+        rival = consistent ? rival : std::min(rival, c);
       }
     }
     stats.distances_computed += evaluated;
@@ -231,14 +355,16 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
       result.outcomes[i] = QueryOutcome::kRatioTest;
       continue;
     }
-    best_slot[i] = best_k;
-    best_cost[i] = best;
-    second_cost[i] = second;
+    accepted_slot[q] = best_k;
+    accepted_cost[q] = best;
+    accepted_second[q] = second;
   }
 
-  // The mutual check uses the reverse bests gathered in the same pass.
+  // The mutual check uses the reverse bests gathered in the same pass. Matches in A's order.
   for (int i = 0; i < n; ++i) {
-    const int k = best_slot[i];
+    const int q = position_of[i];
+    if (q < 0) continue;
+    const int k = accepted_slot[q];
     if (k < 0) continue;
     if (mutual && reverse_idx[k] != i) {
       ++stats.mutual;
@@ -248,8 +374,9 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
     Match match;
     match.query_idx = i;
     match.train_idx = grid_b.slot_index(k);
-    match.distance = CostToDistance(norm, best_cost[i]);
-    match.second_distance = second_cost[i] < inf ? CostToDistance(norm, second_cost[i]) : inf;
+    match.distance = CostToDistance(norm, accepted_cost[q]);
+    match.second_distance =
+        accepted_second[q] < inf ? CostToDistance(norm, accepted_second[q]) : inf;
     match.predicted_uv = predictions[i].uv;
     result.matches.push_back(match);
   }

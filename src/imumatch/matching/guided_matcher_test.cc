@@ -344,6 +344,209 @@ TEST(GuidedMatcherTest, InconsistentCandidatesStillCompeteInTheRatioTest) {
   EXPECT_EQ(lax.correct, 30);
 }
 
+// MatchGuided against a straightforward reference written from the matcher's contract: every
+// keypoint of B tested against every window (no grid), the consistency tests, the ratio test with
+// the best rival, duplicates of the best skipped, the distance threshold and the mutual check.
+// Float descriptors (no ties) with planted near-copies, random angles and sizes, windows with and
+// without depth (capsules), some outside B's image; dense enough that windows hold many
+// candidates.
+TEST(GuidedMatcherTest, EqualsABruteForceReference) {
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<float> ux(0.0f, 639.0f), uy(0.0f, 479.0f), u01(0.0f, 1.0f);
+  std::uniform_real_distribution<float> angle(0.0f, 360.0f), size(7.0f, 60.0f);
+  std::normal_distribution<float> noise(0.0f, 0.05f);
+  const int n = 1500, m = 6000, dims = 16;
+  std::vector<KeypointInfo> kps_a(n), kps_b(m);
+  cv::Mat desc_a(n, dims, CV_32F), desc_b(m, dims, CV_32F);
+  for (int j = 0; j < m; ++j) {
+    kps_b[j] = {ux(rng), uy(rng), j % 7 == 0 ? -1.0f : angle(rng), j % 11 == 0 ? 0.0f : size(rng),
+                0};
+    for (int d = 0; d < dims; ++d) desc_b.at<float>(j, d) = u01(rng);
+  }
+  std::vector<KeypointPrediction> predictions(n);
+  for (int i = 0; i < n; ++i) {
+    const int partner = (i * 13) % m;
+    const KeypointInfo& kb = kps_b[partner];
+    KeypointPrediction& p = predictions[i];
+    p.angle_change_deg = 60.0f * (u01(rng) - 0.5f);
+    p.scale_min = 0.8f + 0.2f * u01(rng);
+    p.scale_max = p.scale_min * (1.0f + 0.5f * u01(rng));
+    // Most partners consistent with the prediction (angle within +-40 deg of it, so some are not;
+    // size in range), the rest random.
+    const bool consistent = i % 6 != 0;
+    kps_a[i] = {kb.x, kb.y,
+                i % 5 == 0 ? -1.0f
+                : consistent && kb.angle_deg >= 0.0f
+                    ? kb.angle_deg - p.angle_change_deg + 80.0f * (u01(rng) - 0.5f) + 360.0f
+                    : angle(rng),
+                i % 9 == 0                     ? 0.0f
+                : consistent && kb.size > 0.0f ? kb.size / p.scale_min
+                                               : size(rng),
+                0};
+    for (int d = 0; d < dims; ++d) {
+      desc_a.at<float>(i, d) = i % 4 == 0 ? u01(rng) : desc_b.at<float>(partner, d) + noise(rng);
+    }
+    const float cx = kb.x + 4.0f * (u01(rng) - 0.5f), cy = kb.y + 4.0f * (u01(rng) - 0.5f);
+    if (i % 3 == 0) {
+      p.status = PredictionStatus::kWithoutDepth;
+      const float len = 150.0f * u01(rng), dir = 6.2832f * u01(rng);
+      p.segment_start = Eigen::Vector2f(cx, cy);
+      p.segment_end = Eigen::Vector2f(cx + len * std::cos(dir), cy + len * std::sin(dir));
+      p.radius = 2.0f + 8.0f * u01(rng);
+      p.min_x = std::min(p.segment_start.x(), p.segment_end.x()) - p.radius;
+      p.max_x = std::max(p.segment_start.x(), p.segment_end.x()) + p.radius;
+      p.min_y = std::min(p.segment_start.y(), p.segment_end.y()) - p.radius;
+      p.max_y = std::max(p.segment_start.y(), p.segment_end.y()) + p.radius;
+      p.uv = p.segment_end;
+    } else if (i % 29 == 1) {
+      p.status = PredictionStatus::kOutsideImage;
+    } else {
+      p.status = PredictionStatus::kWithDepth;
+      p.uv = Eigen::Vector2f(cx, cy);
+      p.segment_start = p.segment_end = p.uv;
+      const float hw = 3.0f + 20.0f * u01(rng), hh = 3.0f + 20.0f * u01(rng);
+      p.min_x = cx - hw;
+      p.max_x = cx + hw;
+      p.min_y = cy - hh;
+      p.max_y = cy + hh;
+    }
+  }
+  const auto wrap = [](float a) { return a - 360.0f * std::floor((a + 180.0f) / 360.0f); };
+  for (const int variant : {0, 1, 2}) {
+    const bool rivals_all = variant != 1, mutual = variant != 2;
+    GuidedMatcherOptions o;
+    o.inconsistent_candidates_in_ratio = rivals_all;
+    o.mutual = mutual;
+    o.max_l2_relative = 0.6;
+    o.duplicate_radius_px = 3.0;
+    // The reference.
+    float ref_b = 1e30f;
+    for (const KeypointInfo& k : kps_b) {
+      if (k.size > 0.0f) ref_b = std::min(ref_b, k.size);
+    }
+    std::vector<QueryOutcome> outcome(n, QueryOutcome::kMatched);
+    std::vector<int> best_of(n, -1);
+    std::vector<double> best_cost(n, 0.0), second_cost(n, 0.0);
+    std::vector<double> reverse_cost(m, 1e300);
+    std::vector<int> reverse_idx(m, -1);
+    const auto cost = [&](int i, int j) {
+      return cv::norm(desc_a.row(i), desc_b.row(j), cv::NORM_L2SQR);
+    };
+    for (int i = 0; i < n; ++i) {
+      const KeypointPrediction& p = predictions[i];
+      if (p.status == PredictionStatus::kOutsideImage) {
+        outcome[i] = QueryOutcome::kOutsideImage;
+        continue;
+      }
+      const KeypointInfo& ka = kps_a[i];
+      bool any_in = false, any_angle = false;
+      std::vector<std::pair<int, bool>> candidates;  // (j, consistent)
+      for (int j = 0; j < m; ++j) {
+        const KeypointInfo& kb = kps_b[j];
+        if (!p.Contains(kb.x, kb.y)) continue;
+        any_in = true;
+        const bool angle_ok =
+            !(ka.angle_deg >= 0.0f && kb.angle_deg >= 0.0f &&
+              std::fabs(wrap(kb.angle_deg - ka.angle_deg - p.angle_change_deg)) > 30.0f);
+        const float lo = ka.size * p.scale_min / 2.0f, hi = ka.size * p.scale_max * 2.0f;
+        const bool size_ok = !(ka.size > 0.0f && kb.size > 0.0f && (kb.size < lo || kb.size > hi));
+        any_angle |= angle_ok;
+        if (angle_ok && size_ok) {
+          candidates.push_back({j, true});
+        } else if (rivals_all) {
+          candidates.push_back({j, false});
+        }
+      }
+      ASSERT_DOUBLE_EQ(o.orientation_tolerance_deg, 30.0);
+      ASSERT_DOUBLE_EQ(o.scale_tolerance_factor, 2.0);
+      int best = -1;
+      double best_c = 1e300;
+      for (const auto& [j, consistent] : candidates) {
+        if (!consistent) continue;
+        const double c = cost(i, j);
+        if (c < best_c) best_c = c, best = j;
+        if (c < reverse_cost[j]) reverse_cost[j] = c, reverse_idx[j] = i;
+      }
+      if (!any_in) {
+        outcome[i] = QueryOutcome::kNoCandidateInWindow;
+        continue;
+      }
+      if (!any_angle) {
+        outcome[i] = QueryOutcome::kOrientation;
+        continue;
+      }
+      if (best < 0) {
+        outcome[i] = QueryOutcome::kScale;
+        continue;
+      }
+      const float scale = std::max(1.0f, kps_b[best].size > 0.0f ? kps_b[best].size / ref_b : 1.0f);
+      const double dup = 3.0 * scale;
+      double second = 1e300, rival = 1e300;
+      for (const auto& [j, consistent] : candidates) {
+        if (j == best ||
+            std::hypot(kps_b[j].x - kps_b[best].x, kps_b[j].y - kps_b[best].y) <= dup) {
+          continue;
+        }
+        (consistent ? second : rival) = std::min(consistent ? second : rival, cost(i, j));
+      }
+      const double max_cost =
+          0.36 * 0.5 *
+          (cv::norm(desc_a.row(i), cv::NORM_L2SQR) + cv::norm(desc_b.row(best), cv::NORM_L2SQR));
+      if (best_c > max_cost) {
+        outcome[i] = QueryOutcome::kDistanceThreshold;
+        continue;
+      }
+      if (!(best_c < 0.64 * std::min({second, rival, max_cost}))) {
+        outcome[i] = QueryOutcome::kRatioTest;
+        continue;
+      }
+      best_of[i] = best;
+      best_cost[i] = best_c;
+      second_cost[i] = second;
+    }
+    ASSERT_DOUBLE_EQ(o.ratio, 0.8);
+    std::vector<int> expected_matches;
+    for (int i = 0; i < n; ++i) {
+      if (best_of[i] < 0) continue;
+      if (mutual && reverse_idx[best_of[i]] != i) {
+        outcome[i] = QueryOutcome::kMutual;
+      } else {
+        expected_matches.push_back(i);
+      }
+    }
+    // The matcher.
+    GridIndex grid;
+    grid.Build(kps_b, 640, 480, static_cast<float>(o.grid_cell_size));
+    const MatchResult r = MatchGuided(predictions, kps_a, DescriptorView::FromMat(desc_a), kps_b,
+                                      grid, DescriptorView::FromMat(desc_b), o);
+    int differing = 0;
+    for (int i = 0; i < n; ++i) {
+      differing += r.outcomes[i] != outcome[i];
+      if (r.outcomes[i] != outcome[i]) {
+        ADD_FAILURE() << "query " << i << ": matcher " << ToString(r.outcomes[i]) << ", reference "
+                      << ToString(outcome[i]);
+      }
+    }
+    EXPECT_EQ(differing, 0) << "rivals_all " << rivals_all << " mutual " << mutual;
+    ASSERT_EQ(r.matches.size(), expected_matches.size());
+    for (size_t k = 0; k < r.matches.size(); ++k) {
+      const Match& mt = r.matches[k];
+      const int i = expected_matches[k];
+      EXPECT_EQ(mt.query_idx, i);
+      EXPECT_EQ(mt.train_idx, best_of[i]);
+      EXPECT_NEAR(mt.distance, std::sqrt(best_cost[i]), 1e-4);
+      if (second_cost[i] < 1e300) {
+        EXPECT_NEAR(mt.second_distance, std::sqrt(second_cost[i]), 1e-4);
+      }
+    }
+    // The case is not trivial: many candidates per window, all outcomes present.
+    EXPECT_GT(r.stats.distances_computed, (rivals_all ? 10 : 3) * n);
+    EXPECT_GT(r.stats.matched, n / 4);
+    EXPECT_GT(r.stats.ratio_test + r.stats.distance_threshold, n / 20);
+    EXPECT_EQ(r.stats.mutual > 0, mutual);
+  }
+}
+
 TEST(GuidedMatcherTest, CheckAndInputValidation) {
   GuidedMatcherOptions o;
   EXPECT_NO_THROW(o.Check());

@@ -59,7 +59,8 @@ std::string MatchStats::ToString() const {
       << " outside_image=" << outside_image << " no_candidate_in_window=" << no_candidate_in_window
       << " orientation=" << orientation << " scale=" << scale
       << " distance_threshold=" << distance_threshold << " ratio_test=" << ratio_test
-      << " mutual=" << mutual << " | distances_computed=" << distances_computed;
+      << " mutual=" << mutual << " | points_scanned=" << points_scanned
+      << " distances_computed=" << distances_computed;
   return out.str();
 }
 

@@ -56,7 +56,9 @@ struct MatchStats {
   int ratio_test = 0;          // best / second-best above the ratio
   int mutual = 0;              // B's best partner (reverse pass) is another keypoint of A
   int matched = 0;
-  // Work done: descriptor distances computed.
+  // Work done: grid points read by the window queries (inside the window or not), and descriptor
+  // distances computed.
+  int64_t points_scanned = 0;
   int64_t distances_computed = 0;
 
   int OutcomeSum() const;

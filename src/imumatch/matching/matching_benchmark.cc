@@ -102,17 +102,81 @@ void RunGuided(benchmark::State& state, const PinholeCamera& camera) {
   const FeatureSet& s = GetFeatures(static_cast<int>(state.range(0)), state.range(1));
   GuidedMatcherWorkspace workspace;
   size_t matches = 0;
+  double per_query = 0.0, scanned = 0.0, no_depth = 0.0;
   for (auto _ : state) {
     MatchResult r =
         workspace.Match(camera, GetFrames().motion, s.kps_a, s.desc_a, GetFrames().depth_a, s.kps_b,
                         s.desc_b, PredictionOptions(), GuidedMatcherOptions());
     matches = r.matches.size();
+    per_query = static_cast<double>(r.stats.distances_computed) / std::max(1, r.stats.queries);
+    scanned = static_cast<double>(r.stats.points_scanned) / std::max(1, r.stats.queries);
+    no_depth = static_cast<double>(r.stats.predicted_without_depth) / std::max(1, r.stats.queries);
+    benchmark::DoNotOptimize(r.matches.data());
+  }
+  SetCounters(state, s, matches);
+  state.counters["dist/query"] = per_query;
+  state.counters["scan/query"] = scanned;
+  state.counters["no_depth"] = no_depth;
+}
+
+void BM_Guided(benchmark::State& state) { RunGuided(state, BenchCamera()); }
+
+// The parts of BM_Guided: prediction (depth lookup + KeypointPredictor, per keypoint of A), grid
+// build over B, and the window search alone (MatchGuided on ready predictions and grid).
+struct GuidedParts {
+  std::vector<KeypointInfo> info_a, info_b;
+  std::vector<float> depths;
+  std::vector<KeypointPrediction> predictions;
+  GridIndex grid;
+};
+const GuidedParts& GetGuidedParts(int kind, int n) {
+  static std::map<std::pair<int, int>, GuidedParts> cache;
+  auto it = cache.find({kind, n});
+  if (it != cache.end()) return it->second;
+  const FeatureSet& s = GetFeatures(kind, n);
+  const PinholeCamera camera = BenchCamera();
+  GuidedParts g;
+  g.info_a = ToKeypointInfos(s.kps_a);
+  g.info_b = ToKeypointInfos(s.kps_b);
+  g.depths = SampleDepths(GetFrames().depth_a, camera.depth_scale, s.kps_a,
+                          PredictionOptions().depth_sampling);
+  g.predictions =
+      PredictKeypoints(camera, GetFrames().motion, g.info_a, g.depths, PredictionOptions());
+  g.grid.Build(g.info_b, camera.width, camera.height,
+               static_cast<float>(GuidedMatcherOptions().grid_cell_size));
+  return cache.emplace(std::make_pair(kind, n), std::move(g)).first->second;
+}
+
+void BM_GuidedPredictOnly(benchmark::State& state) {
+  const int kind = static_cast<int>(state.range(0)), n = static_cast<int>(state.range(1));
+  const FeatureSet& s = GetFeatures(kind, n);
+  const GuidedParts& g = GetGuidedParts(kind, n);
+  const PixelUndistorter undistorter(BenchCamera());
+  std::vector<KeypointPrediction> predictions;
+  for (auto _ : state) {
+    const std::vector<float> depths = SampleDepths(GetFrames().depth_a, BenchCamera().depth_scale,
+                                                   s.kps_a, PredictionOptions().depth_sampling);
+    const KeypointPredictor predictor(undistorter, GetFrames().motion, PredictionOptions());
+    PredictKeypoints(predictor, g.info_a, depths, &predictions);
+    benchmark::DoNotOptimize(predictions.data());
+  }
+  SetCounters(state, s, 0);
+}
+
+void BM_GuidedSearchOnly(benchmark::State& state) {
+  const int kind = static_cast<int>(state.range(0)), n = static_cast<int>(state.range(1));
+  const FeatureSet& s = GetFeatures(kind, n);
+  const GuidedParts& g = GetGuidedParts(kind, n);
+  size_t matches = 0;
+  for (auto _ : state) {
+    MatchResult r =
+        MatchGuided(g.predictions, g.info_a, DescriptorView::FromMat(s.desc_a), g.info_b, g.grid,
+                    DescriptorView::FromMat(s.desc_b), GuidedMatcherOptions());
+    matches = r.matches.size();
     benchmark::DoNotOptimize(r.matches.data());
   }
   SetCounters(state, s, matches);
 }
-
-void BM_Guided(benchmark::State& state) { RunGuided(state, BenchCamera()); }
 
 void BM_GuidedWithDistortion(benchmark::State& state) {
   RunGuided(state, PinholeCamera::TumFreiburg1());
@@ -229,6 +293,8 @@ void OrbSizes(benchmark::internal::Benchmark* b) {
 }
 
 BENCHMARK(BM_Guided)->Apply(OrbSizes)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_GuidedPredictOnly)->Apply(OrbSizes)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_GuidedSearchOnly)->Apply(OrbSizes)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_CvKnnRatio)->Apply(OrbSizes)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_OwnBruteForceRatio)->Apply(OrbSizes)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_OwnBruteForceKernel)->Apply(KernelSizes)->Unit(benchmark::kMicrosecond);
