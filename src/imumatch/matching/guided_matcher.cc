@@ -54,15 +54,15 @@ struct CandidateTest {
 // of the run: bit 0 some candidate inside the window, bit 1 some inside with a consistent angle.
 // Angles are in [0, 360) or -1 (no angle), sizes > 0 or 0 (no size).
 template <bool kCapsule>
-int TestRun(const CandidateTest& t, const float* xs, const float* ys, const float* angles,
-            const float* sizes, int begin, int end, float lo_x, float hi_x, float lo_y, float hi_y,
-            int keep_inconsistent, int* kept_slot, uint8_t* kept_consistent, int* kept) {
+int TestRun(const CandidateTest& t, const GuidedSearchScratch::Candidate* b, int begin, int end,
+            float lo_x, float hi_x, float lo_y, float hi_y, int keep_inconsistent, int* kept_slot,
+            uint8_t* kept_consistent, int* kept) {
   const float len2 = t.dx * t.dx + t.dy * t.dy;
   const float denominator = len2 > 0.0f ? len2 : 1.0f;  // a point segment: dot = 0, s = 0
   const int no_angle_check = !t.check_angle, no_size_check = !t.check_size;
   int n = *kept, any = 0;
   for (int k = begin; k < end; ++k) {
-    const float x = xs[k], y = ys[k];
+    const float x = b[k].x, y = b[k].y;
     int in = (x >= lo_x) & (x <= hi_x) & (y >= lo_y) & (y <= hi_y);
     if constexpr (kCapsule) {
       const float px = x - t.start_x, py = y - t.start_y;
@@ -70,11 +70,11 @@ int TestRun(const CandidateTest& t, const float* xs, const float* ys, const floa
       const float ex = px - s * t.dx, ey = py - s * t.dy;
       in &= static_cast<int>(ex * ex + ey * ey <= t.r2);
     }
-    const float a = angles[k];
+    const float a = b[k].angle_deg;
     const float d = std::fabs(a - t.expected_angle);
     const int angle_ok =
         no_angle_check | (a < 0.0f) | static_cast<int>(std::min(d, 360.0f - d) <= t.orient_tol);
-    const float size = sizes[k];
+    const float size = b[k].size;
     const int size_ok =
         no_size_check | (size <= 0.0f) | ((size >= t.size_lo) & (size <= t.size_hi));
     const int consistent = angle_ok & size_ok;
@@ -94,6 +94,18 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
                         const DescriptorView& descriptors_a,
                         const std::vector<KeypointInfo>& keypoints_b, const GridIndex& grid_b,
                         const DescriptorView& descriptors_b, const GuidedMatcherOptions& options) {
+  GuidedSearchScratch scratch;
+  return MatchGuided(predictions, keypoints_a, descriptors_a, keypoints_b, grid_b, descriptors_b,
+                     options, &scratch);
+}
+
+MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
+                        const std::vector<KeypointInfo>& keypoints_a,
+                        const DescriptorView& descriptors_a,
+                        const std::vector<KeypointInfo>& keypoints_b, const GridIndex& grid_b,
+                        const DescriptorView& descriptors_b, const GuidedMatcherOptions& options,
+                        GuidedSearchScratch* scratch) {
+  IMUMATCH_CHECK(scratch != nullptr, "MatchGuided needs a scratch");
   options.Check();
   const int n = static_cast<int>(keypoints_a.size());
   const int m = static_cast<int>(keypoints_b.size());
@@ -128,48 +140,74 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
   // order: a window's candidates are then contiguous runs of slots, tested in vectorised loops
   // (O(m) copy, a few us per 1000). Angles are normalised into [0, 360) once here (no angle: -1),
   // sizes that are not positive numbers become 0 (no size check), as the tests below expect.
-  std::vector<float> b_x(m), b_y(m), b_angle(m), b_size(m);
-  std::vector<uint8_t> desc_b(static_cast<size_t>(m) * bytes);
+  std::vector<GuidedSearchScratch::Candidate>& cand_b = scratch->candidates_b;
+  std::vector<uint8_t>& desc_b = scratch->desc_b;
+  cand_b.resize(m);
+  desc_b.resize(static_cast<size_t>(m) * bytes);
+  constexpr int kPrefetchAhead = 8;  // rows are read in slot order: a random gather over B
   for (int k = 0; k < m; ++k) {
+    if (k + kPrefetchAhead < m) {
+      const int ahead = grid_b.slot_index(k + kPrefetchAhead);
+      __builtin_prefetch(&keypoints_b[ahead]);
+      const uint8_t* row = descriptors_b.Row(ahead);
+      for (int b = 0; b < bytes; b += 64) __builtin_prefetch(row + b);
+    }
     const int j = grid_b.slot_index(k);
     const KeypointInfo& kb = keypoints_b[j];
-    b_x[k] = kb.x;
-    b_y[k] = kb.y;
-    b_angle[k] = kb.angle_deg >= 0.0f && std::isfinite(kb.angle_deg)
-                     ? NormalizeDegrees(kb.angle_deg)
-                     : -1.0f;
-    b_size[k] = kb.size > 0.0f ? kb.size : 0.0f;
+    cand_b[k].x = kb.x;
+    cand_b[k].y = kb.y;
+    cand_b[k].angle_deg = kb.angle_deg >= 0.0f && std::isfinite(kb.angle_deg)
+                              ? NormalizeDegrees(kb.angle_deg)
+                              : -1.0f;
+    cand_b[k].size = kb.size > 0.0f ? kb.size : 0.0f;
     std::memcpy(desc_b.data() + static_cast<size_t>(k) * bytes, descriptors_b.Row(j), bytes);
   }
   const bool mutual = options.mutual;
-  std::vector<float> reverse_cost;  // by slot
-  std::vector<int> reverse_idx;
+  std::vector<float>& reverse_cost = scratch->reverse_cost;  // by slot
+  std::vector<int>& reverse_idx = scratch->reverse_idx;
   if (mutual) {
     reverse_cost.assign(m, inf);
     reverse_idx.assign(m, -1);
   }
   const DescriptorCostGatherFn cost_gather =
       m > 0 ? SelectCostGatherFunction(norm, bytes) : nullptr;
-  std::vector<int> kept_slot(256);
-  std::vector<uint8_t> kept_consistent(256);
-  std::vector<float> kept_cost(256);
+  std::vector<int>& kept_slot = scratch->kept_slot;
+  std::vector<uint8_t>& kept_consistent = scratch->kept_consistent;
+  std::vector<float>& kept_cost = scratch->kept_cost;
   const int rivals_all_bit = rivals_all ? 1 : 0;
   const bool dedup = options.duplicate_radius_px > 0.0;
   const float dup_radius = static_cast<float>(options.duplicate_radius_px);
   const float ref_b = ReferenceKeypointSize(keypoints_b);
 
   // The queries with a window are visited in the grid's cell order of their windows (a counting
-  // sort, O(n + cells)): consecutive windows then read neighbouring slots of B, and the per-query
+  // sort, O(n + cells), by tiles of cells): consecutive windows then read neighbouring slots of B,
+  // and the per-query
   // results are written in visiting order, so the search touches B's arrays almost as a stream.
   // Only the query's own records (prediction, keypoint, descriptor) are read out of order, and
   // they are prefetched a few queries ahead. In A's order, every window would read a random part
   // of B: a cache miss per candidate once B's arrays outgrow L2 (thousands of keypoints). The
   // result does not depend on the order (the mutual check breaks ties by the lower query index).
-  std::vector<int> order;               // visiting position -> query index
-  std::vector<int> position_of(n, -1);  // query index -> visiting position (-1: no window)
+  std::vector<int>& order = scratch->order;              // visiting position -> query index
+  std::vector<int>& position_of = scratch->position_of;  // query index -> visiting position
+  position_of.assign(n, -1);                             // (-1: no window)
   {
-    const int cells = grid_b.num_cells();
-    std::vector<int> start(static_cast<size_t>(cells) + 1, 0), cell(n, -1);
+    // Visiting key: tiles of kTile x kTile cells in row-major order, and the cells of a tile in
+    // row-major order. A row-major sweep over the whole grid would come back to a row of B's
+    // data only after a whole image width of queries (its reuse distance grows with the image,
+    // and past L2's size every window reads from L3); a tile's windows read a bounded patch of B.
+    constexpr int kTile = 8;
+    const int grid_cols = grid_b.cols();
+    const int tiles_x = (grid_cols + kTile - 1) / kTile;
+    const int tiles_y = (grid_b.rows() + kTile - 1) / kTile;
+    const int cells = tiles_x * tiles_y * kTile * kTile;
+    const auto visit_key = [&](int c) {
+      const int r = c / grid_cols, col = c % grid_cols;
+      return ((r / kTile) * tiles_x + col / kTile) * (kTile * kTile) + (r % kTile) * kTile +
+             col % kTile;
+    };
+    std::vector<int>&start = scratch->cell_start, &cell = scratch->cell;
+    start.assign(static_cast<size_t>(cells) + 1, 0);
+    cell.assign(n, -1);
     for (int i = 0; i < n; ++i) {
       const KeypointPrediction& p = predictions[i];
       switch (p.status) {
@@ -192,7 +230,7 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
           result.outcomes[i] = QueryOutcome::kNoPrediction;
           continue;
       }
-      cell[i] = grid_b.CellOf(0.5f * (p.min_x + p.max_x), 0.5f * (p.min_y + p.max_y));
+      cell[i] = visit_key(grid_b.CellOf(0.5f * (p.min_x + p.max_x), 0.5f * (p.min_y + p.max_y)));
       ++start[cell[i] + 1];
     }
     for (int c = 0; c < cells; ++c) start[c + 1] += start[c];
@@ -205,9 +243,12 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
   }
   const int visited = static_cast<int>(order.size());
   // Per visiting position: the accepted candidate's slot (-1: none), its cost, the runner-up's.
-  std::vector<int> accepted_slot(visited, -1);
-  std::vector<float> accepted_cost(visited), accepted_second(visited);
-  constexpr int kPrefetchAhead = 6;
+  std::vector<int>& accepted_slot = scratch->accepted_slot;
+  std::vector<float>&accepted_cost = scratch->accepted_cost,
+  &accepted_second = scratch->accepted_second;
+  accepted_slot.assign(visited, -1);
+  accepted_cost.resize(visited);
+  accepted_second.resize(visited);
 
   for (int q = 0; q < visited; ++q) {
     if (q + kPrefetchAhead < visited) {
@@ -259,12 +300,10 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
         kept_cost.resize(size);
       }
       const int any =
-          capsule ? TestRun<true>(test, b_x.data(), b_y.data(), b_angle.data(), b_size.data(),
-                                  begin, end, lo_x, hi_x, lo_y, hi_y, rivals_all_bit,
-                                  kept_slot.data(), kept_consistent.data(), &kept)
-                  : TestRun<false>(test, b_x.data(), b_y.data(), b_angle.data(), b_size.data(),
-                                   begin, end, lo_x, hi_x, lo_y, hi_y, rivals_all_bit,
-                                   kept_slot.data(), kept_consistent.data(), &kept);
+          capsule ? TestRun<true>(test, cand_b.data(), begin, end, lo_x, hi_x, lo_y, hi_y,
+                                  rivals_all_bit, kept_slot.data(), kept_consistent.data(), &kept)
+                  : TestRun<false>(test, cand_b.data(), begin, end, lo_x, hi_x, lo_y, hi_y,
+                                   rivals_all_bit, kept_slot.data(), kept_consistent.data(), &kept);
       any_in_window |= (any & 1) != 0;
       any_angle_ok |= (any & 2) != 0;
     };
@@ -304,16 +343,16 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
     // pyramid level, another orientation): they do not make the match ambiguous.
     float second = inf, rival = inf;
     if (best_j >= 0) {
-      const float best_size = b_size[best_k];
+      const float best_size = cand_b[best_k].size;
       float dup2 = -1.0f;  // no candidate is a duplicate
       if (dedup) {
         const float scale =
             ref_b > 0.0f && best_size > 0.0f ? std::max(1.0f, best_size / ref_b) : 1.0f;
         dup2 = dup_radius * dup_radius * scale * scale;
       }
-      const float bx = b_x[best_k], by = b_y[best_k];
+      const float bx = cand_b[best_k].x, by = cand_b[best_k].y;
       for (int j = 0; j < kept; ++j) {
-        const float dx = b_x[kept_slot[j]] - bx, dy = b_y[kept_slot[j]] - by;
+        const float dx = cand_b[kept_slot[j]].x - bx, dy = cand_b[kept_slot[j]].y - by;
         const bool skip = (j == best_j) | (dx * dx + dy * dy <= dup2);
         const float c = skip ? inf : kept_cost[j];
         const bool consistent = kept_consistent[j];
@@ -361,6 +400,9 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
   }
 
   // The mutual check uses the reverse bests gathered in the same pass. Matches in A's order.
+  int accepted = 0;
+  for (int q = 0; q < visited; ++q) accepted += accepted_slot[q] >= 0;
+  result.matches.reserve(accepted);
   for (int i = 0; i < n; ++i) {
     const int q = position_of[i];
     if (q < 0) continue;
@@ -437,7 +479,7 @@ MatchResult GuidedMatcherWorkspace::Match(const PinholeCamera& camera, const Cam
   grid_.Build(info_b_, camera.width, camera.height,
               static_cast<float>(matcher_options.grid_cell_size));
   return MatchGuided(predictions_, info_a_, DescriptorView::FromMat(descriptors_a), info_b_, grid_,
-                     DescriptorView::FromMat(descriptors_b), matcher_options);
+                     DescriptorView::FromMat(descriptors_b), matcher_options, &scratch_);
 }
 
 MatchResult MatchFramesGuided(const PinholeCamera& camera, const CameraMotion& motion,

@@ -65,6 +65,33 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
                         const DescriptorView& descriptors_a,
                         const std::vector<KeypointInfo>& keypoints_b, const GridIndex& grid_b,
                         const DescriptorView& descriptors_b, const GuidedMatcherOptions& options);
+
+// The working memory of MatchGuided: B's keypoints and descriptors copied into the grid's slot
+// order, the queries' visiting order, the reverse bests, per-query results (about 100 bytes per
+// keypoint). Passing the same scratch to successive calls (one per thread) reuses it: fresh large
+// buffers every frame cost page faults and zeroing that grow faster than the keypoint count.
+struct GuidedSearchScratch {
+  // A keypoint of B as the window tests read it (one 16-byte record per slot).
+  struct Candidate {
+    float x, y, angle_deg, size;
+  };
+  std::vector<Candidate> candidates_b;
+  std::vector<uint8_t> desc_b;
+  std::vector<float> reverse_cost;
+  std::vector<int> reverse_idx;
+  std::vector<int> kept_slot;
+  std::vector<uint8_t> kept_consistent;
+  std::vector<float> kept_cost;
+  std::vector<int> order, position_of, cell_start, cell;
+  std::vector<int> accepted_slot;
+  std::vector<float> accepted_cost, accepted_second;
+};
+MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
+                        const std::vector<KeypointInfo>& keypoints_a,
+                        const DescriptorView& descriptors_a,
+                        const std::vector<KeypointInfo>& keypoints_b, const GridIndex& grid_b,
+                        const DescriptorView& descriptors_b, const GuidedMatcherOptions& options,
+                        GuidedSearchScratch* scratch);
 // The same with the grid over frame B's keypoints (ideal pixels of a width x height camera) built
 // here, for callers that match frame B once.
 MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
@@ -113,6 +140,7 @@ class GuidedMatcherWorkspace {
   std::vector<float> depths_;
   std::vector<KeypointPrediction> predictions_;
   GridIndex grid_;
+  GuidedSearchScratch scratch_;
 };
 
 }  // namespace imumatch
