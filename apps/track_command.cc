@@ -48,7 +48,9 @@ void RunTrackCommand(const TrackArgs& a) {
   o.first_frame = a.first;
   o.max_frames = a.max_frames;
   o.keep_visuals = a.images;
-  ApplyThreads(a.threads);
+  // With two or more threads, ORB's pyramid levels are split between two of them (the front
+  // end's latency per frame; FeatureOptions::threads).
+  o.front_end.features.threads = std::min(2, ApplyThreads(a.threads));
   o.thresholds_px.clear();
   std::stringstream list(a.thresholds);
   for (std::string item; std::getline(list, item, ',');) {
@@ -120,7 +122,9 @@ void AddTrackCommand(CLI::App& app) {
   cmd->add_option("--images", a->images, "match images of the first N judged frames")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--threads", a->threads, "worker threads of OpenCV (0 = all cores)")
+  cmd->add_option("--threads", a->threads,
+                  "worker threads of OpenCV (0 = all cores); with 2 or more, ORB's pyramid levels "
+                  "are split between two")
       ->capture_default_str()
       ->check(CLI::Range(0, 1024));
   cmd->add_option("--thresholds", a->thresholds,

@@ -1,14 +1,19 @@
 #include "imumatch/eval/end_to_end.h"
 
+#include <algorithm>
+#include <exception>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 #include <vector>
 
+#include <opencv2/core/utility.hpp>
 #include <opencv2/features2d.hpp>
 
 #include "imumatch/core/error.h"
+#include "imumatch/core/time.h"
 #include "imumatch/eval/pair_motion.h"
-#include "imumatch/eval/pipelined.h"
+#include "imumatch/features/orb_split.h"
 #include "imumatch/matching/baseline_matchers.h"
 
 namespace imumatch {
@@ -16,26 +21,223 @@ namespace imumatch {
 void EndToEndOptions::Check() const {
   IMUMATCH_CHECK(max_frames >= 2, "max_frames = " << max_frames);
   IMUMATCH_CHECK(max_keypoints >= 1, "max_keypoints = " << max_keypoints);
+  IMUMATCH_CHECK(repetitions >= 1 && repetitions <= 100, "repetitions = " << repetitions);
 }
 
 std::string EndToEndTiming::Describe() const {
   std::ostringstream out;
   out << std::fixed << std::setprecision(2);
-  out << "end-to-end ORB pipeline over " << frames << " frames (" << width << "x" << height
-      << "): sequential OpenCV (imread + ORB + BFMatcher knn/ratio) " << sequential_ms_per_frame
-      << " ms/frame, imumatch pipelined (reader thread + ORB + IMU + guided) "
-      << pipelined_ms_per_frame << " ms/frame";
-  if (pipelined_ms_per_frame > 0.0) {
-    out << " (x" << sequential_ms_per_frame / pipelined_ms_per_frame << ")";
+  out << "end-to-end ORB-1000 stream over " << frames << " frames (" << width << "x" << height
+      << "): sequential OpenCV (decode + ORB + BFMatcher knn/ratio) " << sequential_ms_per_frame
+      << " ms/frame, latency " << sequential_latency_ms << " ms; imumatch on " << threads
+      << " threads frame by frame (decode image | depth, ORB levels split, IMU + guided) "
+      << imumatch_ms_per_frame << " ms/frame, latency " << imumatch_latency_ms
+      << " ms; overlapped (next image decoded during ORB) " << overlapped_ms_per_frame
+      << " ms/frame, latency " << overlapped_latency_ms << " ms";
+  if (imumatch_ms_per_frame > 0.0 && sequential_latency_ms > 0.0) {
+    out << " (throughput x" << Throughput() << ", latency x" << LatencyRatio() << ")";
   }
   if (motion_failures > 0) out << "; " << motion_failures << " frames had no motion";
   return out.str();
 }
 
+namespace {
+
+// Runs first() and second() at once on OpenCV's thread pool (one after the other when the pool
+// has a single thread); rethrows the first exception in the caller.
+template <typename F0, typename F1>
+void RunBoth(F0&& first, F1&& second) {
+  std::exception_ptr errors[2];
+  cv::parallel_for_(cv::Range(0, 2), [&](const cv::Range& range) {
+    for (int task = range.start; task < range.end; ++task) {
+      try {
+        if (task == 0) {
+          first();
+        } else {
+          second();
+        }
+      } catch (...) {
+        errors[task] = std::current_exception();
+      }
+    }
+  });
+  for (const std::exception_ptr& e : errors) {
+    if (e) std::rethrow_exception(e);
+  }
+}
+
+struct PassTiming {
+  double ms_per_frame = 0.0;
+  double latency_ms = 0.0;
+  int matches = 0;
+  int motion_failures = 0;
+};
+
+PassTiming SequentialOpenCvPass(const EvalSource& source, const EvaluationOptions& options,
+                                const EndToEndOptions& e2e, size_t n, cv::Size* size) {
+  PassTiming pass;
+  cv::Ptr<cv::ORB> orb = cv::ORB::create(e2e.max_keypoints);
+  cv::BFMatcher matcher(cv::NORM_HAMMING);
+  std::vector<cv::KeyPoint> kp_prev, kp;
+  cv::Mat desc_prev, desc;
+  double latency_sum = 0.0;
+  const auto t0 = SteadyClock::now();
+  for (size_t i = 0; i < n; ++i) {
+    const auto frame_start = SteadyClock::now();
+    const cv::Mat image = source.image_reader(e2e.first_frame + i);
+    *size = image.size();
+    orb->detectAndCompute(image, cv::noArray(), kp, desc);
+    if (i > 0 && !desc.empty() && !desc_prev.empty()) {
+      std::vector<std::vector<cv::DMatch>> knn;
+      matcher.knnMatch(desc_prev, desc, knn, 2);
+      for (const auto& m : knn) {
+        if (m.size() == 1 || (m.size() >= 2 && m[0].distance < options.ratio * m[1].distance)) {
+          ++pass.matches;
+        }
+      }
+    }
+    latency_sum += MsSince(frame_start);
+    std::swap(kp_prev, kp);
+    std::swap(desc_prev, desc);
+  }
+  pass.ms_per_frame = MsSince(t0) / static_cast<double>(n);
+  pass.latency_ms = latency_sum / static_cast<double>(n);
+  return pass;
+}
+
+PassTiming ImumatchPass(const EvalSource& source, const EvaluationOptions& options,
+                        const EndToEndOptions& e2e, size_t n, const ImuBiasEstimate& bias) {
+  const Dataset& dataset = source.dataset;
+  PassTiming pass;
+  FeatureOptions fopts = options.features;
+  fopts.kind = DetectorKind::kOrb;
+  fopts.max_keypoints = e2e.max_keypoints;
+  fopts.threads = 2;
+  GuidedMatcherWorkspace workspace;
+  Features prev, cur;
+  cv::Mat prev_depth, image, depth;
+  double latency_sum = 0.0;
+  const auto t0 = SteadyClock::now();
+  for (size_t i = 0; i < n; ++i) {
+    const size_t index = e2e.first_frame + i;
+    const auto frame_start = SteadyClock::now();
+    // The depth is needed only when this frame is A of the next pair, but decoding it next to the
+    // image uses the second core while the image decodes.
+    RunBoth([&] { image = source.image_reader(index); },
+            [&] { depth = source.depth_reader(index); });
+    cur = ExtractFeatures(image, fopts);
+    if (i > 0) {
+      std::string reason;
+      const std::optional<PairMotion> motion =
+          (dataset.frames[index - 1].world_from_cam && dataset.frames[index].world_from_cam)
+              ? ComputePairMotion(dataset, {index - 1, index}, i, options, bias, reason)
+              : std::nullopt;
+      if (motion) {
+        const MatchResult r = workspace.Match(dataset.camera, motion->motion, prev.keypoints,
+                                              prev.descriptors, prev_depth, cur.keypoints,
+                                              cur.descriptors, options.prediction, options.guided);
+        pass.matches += static_cast<int>(r.matches.size());
+      } else {
+        ++pass.motion_failures;
+        pass.matches += static_cast<int>(
+            MatchOpenCvKnnRatio(prev.descriptors, cur.descriptors, options.ratio).size());
+      }
+    }
+    latency_sum += MsSince(frame_start);
+    std::swap(prev, cur);
+    std::swap(prev_depth, depth);
+  }
+  pass.ms_per_frame = MsSince(t0) / static_cast<double>(n);
+  pass.latency_ms = latency_sum / static_cast<double>(n);
+  return pass;
+}
+
+// The overlapped schedule: step t decodes image t and describes frame t-1 (ORB in two parts,
+// depth decode), four tasks that OpenCV's threads take in this order as they free up (the longest
+// first); then frame t-1 is matched with frame t-2.
+PassTiming OverlappedPass(const EvalSource& source, const EvaluationOptions& options,
+                          const EndToEndOptions& e2e, size_t n, const ImuBiasEstimate& bias) {
+  const Dataset& dataset = source.dataset;
+  PassTiming pass;
+  OrbSplitParams orb;
+  orb.max_keypoints = e2e.max_keypoints;
+  orb.scale_factor = static_cast<float>(options.features.orb_scale_factor);
+  orb.n_levels = options.features.orb_n_levels;
+  orb.fast_threshold = options.features.orb_fast_threshold;
+  GuidedMatcherWorkspace workspace;
+  cv::Mat image[2], depth[2];  // by frame parity
+  Features prev, cur;
+  std::vector<cv::KeyPoint> part_kp[2];
+  cv::Mat part_desc[2];
+  std::vector<SteadyClock::time_point> started(n);
+  double latency_sum = 0.0;
+  const auto t0 = SteadyClock::now();
+  for (size_t t = 0; t <= n; ++t) {
+    if (t < n) started[t] = SteadyClock::now();
+    const size_t k = t - 1;  // the frame described in this step (when t >= 1)
+    std::exception_ptr errors[4];
+    cv::parallel_for_(
+        cv::Range(0, 4),
+        [&](const cv::Range& range) {
+          for (int task = range.start; task < range.end; ++task) {
+            try {
+              if (task == 0 && t < n) image[t % 2] = source.image_reader(e2e.first_frame + t);
+              if (t == 0) continue;
+              if (task == 1) {
+                DetectAndComputeOrbPart(image[k % 2], orb, 0, &part_kp[0], &part_desc[0]);
+              } else if (task == 2) {
+                depth[k % 2] = source.depth_reader(e2e.first_frame + k);
+              } else if (task == 3) {
+                DetectAndComputeOrbPart(image[k % 2], orb, 1, &part_kp[1], &part_desc[1]);
+              }
+            } catch (...) {
+              errors[task] = std::current_exception();
+            }
+          }
+        },
+        4);
+    for (const std::exception_ptr& e : errors) {
+      if (e) std::rethrow_exception(e);
+    }
+    if (t == 0) continue;
+    std::vector<cv::KeyPoint> merged;
+    cv::Mat merged_desc;
+    MergeOrbSplitParts(part_kp, part_desc, &merged, &merged_desc);
+    cur = StrongestFirst(merged, merged_desc, e2e.max_keypoints);  // as ExtractFeatures does
+    if (k > 0) {
+      const size_t index = e2e.first_frame + k;
+      std::string reason;
+      const std::optional<PairMotion> motion =
+          (dataset.frames[index - 1].world_from_cam && dataset.frames[index].world_from_cam)
+              ? ComputePairMotion(dataset, {index - 1, index}, k, options, bias, reason)
+              : std::nullopt;
+      if (motion) {
+        const MatchResult r = workspace.Match(dataset.camera, motion->motion, prev.keypoints,
+                                              prev.descriptors, depth[(k - 1) % 2], cur.keypoints,
+                                              cur.descriptors, options.prediction, options.guided);
+        pass.matches += static_cast<int>(r.matches.size());
+      } else {
+        ++pass.motion_failures;
+        pass.matches += static_cast<int>(
+            MatchOpenCvKnnRatio(prev.descriptors, cur.descriptors, options.ratio).size());
+      }
+    }
+    latency_sum += MsSince(started[k]);
+    std::swap(prev, cur);
+  }
+  pass.ms_per_frame = MsSince(t0) / static_cast<double>(n);
+  pass.latency_ms = latency_sum / static_cast<double>(n);
+  return pass;
+}
+
+}  // namespace
+
 EndToEndTiming MeasureEndToEnd(const EvalSource& source, const EvaluationOptions& options,
                                const EndToEndOptions& e2e) {
   e2e.Check();
   options.Check();
+  IMUMATCH_CHECK(source.image_reader && source.depth_reader,
+                 "the end-to-end timing needs a source with separate image and depth readers");
   const Dataset& dataset = source.dataset;
   const ImuBiasEstimate bias = options.motion_source == MotionSource::kImu
                                    ? EstimateImuBias(dataset, options.still_init_s)
@@ -45,70 +247,29 @@ EndToEndTiming MeasureEndToEnd(const EvalSource& source, const EvaluationOptions
   const size_t n = std::min(e2e.max_frames, dataset.frames.size() - e2e.first_frame);
   if (n < 2) return timing;
   timing.frames = static_cast<int>(n);
-
-  // Sequential plain OpenCV.
-  {
-    cv::Ptr<cv::ORB> orb = cv::ORB::create(e2e.max_keypoints);
-    cv::BFMatcher matcher(cv::NORM_HAMMING);
-    std::vector<cv::KeyPoint> kp_prev, kp;
-    cv::Mat desc_prev, desc;
-    const auto t0 = SteadyClock::now();
-    for (size_t i = 0; i < n; ++i) {
-      const FrameImages img = source.reader(e2e.first_frame + i, false);
-      timing.width = img.image.cols;
-      timing.height = img.image.rows;
-      orb->detectAndCompute(img.image, cv::noArray(), kp, desc);
-      if (i > 0 && !desc.empty() && !desc_prev.empty()) {
-        std::vector<std::vector<cv::DMatch>> knn;
-        matcher.knnMatch(desc_prev, desc, knn, 2);
-        for (const auto& m : knn) {
-          if (m.size() == 1 || (m.size() >= 2 && m[0].distance < options.ratio * m[1].distance))
-            ++timing.sequential_matches;
-        }
-      }
-      std::swap(kp_prev, kp);
-      std::swap(desc_prev, desc);
-    }
-    timing.sequential_ms_per_frame = MsSince(t0) / static_cast<double>(n);
-  }
-
-  // imumatch, pipelined.
-  {
-    FeatureOptions fopts = options.features;
-    fopts.kind = DetectorKind::kOrb;
-    fopts.max_keypoints = e2e.max_keypoints;
-    GuidedMatcherWorkspace workspace;
-    Features prev;
-    cv::Mat prev_depth;
-    const auto t0 = SteadyClock::now();
-    size_t i = 0;
-    RunPipelined<FrameImages>(
-        n, 2, [&](size_t k) { return source.reader(e2e.first_frame + k, true); },
-        [&](FrameImages img) {
-          const size_t index = e2e.first_frame + i;
-          Features cur = ExtractFeatures(img.image, fopts);
-          if (i > 0) {
-            std::string reason;
-            const std::optional<PairMotion> motion =
-                (dataset.frames[index - 1].world_from_cam && dataset.frames[index].world_from_cam)
-                    ? ComputePairMotion(dataset, {index - 1, index}, i, options, bias, reason)
-                    : std::nullopt;
-            if (motion) {
-              const MatchResult r = workspace.Match(
-                  dataset.camera, motion->motion, prev.keypoints, prev.descriptors, prev_depth,
-                  cur.keypoints, cur.descriptors, options.prediction, options.guided);
-              timing.pipelined_matches += static_cast<int>(r.matches.size());
-            } else {
-              ++timing.motion_failures;
-              timing.pipelined_matches += static_cast<int>(
-                  MatchOpenCvKnnRatio(prev.descriptors, cur.descriptors, options.ratio).size());
-            }
-          }
-          prev = std::move(cur);
-          prev_depth = img.depth;
-          ++i;
-        });
-    timing.pipelined_ms_per_frame = MsSince(t0) / static_cast<double>(n);
+  timing.threads = cv::getNumThreads();
+  const double inf = std::numeric_limits<double>::infinity();
+  timing.sequential_ms_per_frame = timing.sequential_latency_ms = inf;
+  timing.imumatch_ms_per_frame = timing.imumatch_latency_ms = inf;
+  timing.overlapped_ms_per_frame = timing.overlapped_latency_ms = inf;
+  // The two pipelines alternate, so that a slow spell of the machine hits both.
+  for (int rep = 0; rep < e2e.repetitions; ++rep) {
+    cv::Size size;
+    const PassTiming s = SequentialOpenCvPass(source, options, e2e, n, &size);
+    const PassTiming m = ImumatchPass(source, options, e2e, n, bias);
+    const PassTiming o = OverlappedPass(source, options, e2e, n, bias);
+    timing.overlapped_ms_per_frame = std::min(timing.overlapped_ms_per_frame, o.ms_per_frame);
+    timing.overlapped_latency_ms = std::min(timing.overlapped_latency_ms, o.latency_ms);
+    timing.overlapped_matches = o.matches;
+    timing.width = size.width;
+    timing.height = size.height;
+    timing.sequential_ms_per_frame = std::min(timing.sequential_ms_per_frame, s.ms_per_frame);
+    timing.sequential_latency_ms = std::min(timing.sequential_latency_ms, s.latency_ms);
+    timing.imumatch_ms_per_frame = std::min(timing.imumatch_ms_per_frame, m.ms_per_frame);
+    timing.imumatch_latency_ms = std::min(timing.imumatch_latency_ms, m.latency_ms);
+    timing.sequential_matches = s.matches;
+    timing.imumatch_matches = m.matches;
+    timing.motion_failures = m.motion_failures;
   }
   return timing;
 }

@@ -1,6 +1,7 @@
 // End-to-end evaluation runs checked against ground truth: a short synthetic sequence (simulated
 // IMU, exact depth and poses) and the real TUM fr1_xyz pair (Kinect depth, motion capture poses).
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -11,6 +12,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "imumatch/core/error.h"
 #include "imumatch/eval/end_to_end.h"
 #include "imumatch/eval/evaluation.h"
 #include "imumatch/eval/match_image.h"
@@ -127,6 +129,40 @@ TEST(EvalIntegrationTest, SyntheticGuidedIsPreciseAndFindsMoreCorrectMatches) {
     EXPECT_LT(r.motion_rotation_error_deg, 0.5);
     EXPECT_LT(r.motion_translation_error_m, seed_pair ? 0.4 : 0.01);
   }
+}
+
+// The end-to-end timing on a short stream: both imumatch schedules (frame by frame, overlapped)
+// describe the frames identically and so find the same matches; the timings are positive and
+// finite (their values are the benchmark's business, not a test's); a source without separate
+// image and depth readers is refused.
+TEST(EvalIntegrationTest, EndToEndSchedulesAgreeOnTheMatches) {
+  SeedCaseOptions so;
+  so.motions = {"left30"};
+  so.intermediate_frames = 5;
+  so.camera = SmallCamera();
+  const std::vector<SeedCase> cases = MakeSeedCases(so);
+  ASSERT_FALSE(cases.empty());
+  EndToEndOptions e2e;
+  e2e.max_frames = 7;
+  e2e.max_keypoints = 300;
+  EvaluationOptions o;
+  o.motion_source = MotionSource::kGroundTruth;
+  const EndToEndTiming t = MeasureEndToEnd(cases.front().source, o, e2e);
+  EXPECT_EQ(t.frames, 7);
+  EXPECT_EQ(t.width, 320);
+  for (double v : {t.sequential_ms_per_frame, t.sequential_latency_ms, t.imumatch_ms_per_frame,
+                   t.imumatch_latency_ms, t.overlapped_ms_per_frame, t.overlapped_latency_ms}) {
+    EXPECT_TRUE(std::isfinite(v) && v > 0.0) << v;
+  }
+  EXPECT_EQ(t.motion_failures, 0);
+  EXPECT_GT(t.imumatch_matches, 6 * 100);  // 6 pairs, a 30 deg/2 s turn: most keypoints match
+  EXPECT_EQ(t.overlapped_matches, t.imumatch_matches);
+  EXPECT_GT(t.sequential_matches, 0);
+  EvalSource bad = cases.front().source;
+  bad.depth_reader = nullptr;
+  EXPECT_THROW(MeasureEndToEnd(bad, o, e2e), InvalidArgument);
+  e2e.repetitions = 0;
+  EXPECT_THROW(MeasureEndToEnd(cases.front().source, o, e2e), InvalidArgument);
 }
 
 TEST(EvalIntegrationTest, GroundTruthMotionSourceAndPaperMode) {

@@ -10,19 +10,39 @@
 
 namespace imumatch {
 
-FrameReader MakeDiskFrameReader(const Dataset& dataset) {
+std::function<cv::Mat(size_t)> MakeDiskImageReader(const Dataset& dataset) {
   auto frames = std::make_shared<std::vector<FrameRecord>>(dataset.frames);
   const int width = dataset.camera.width, height = dataset.camera.height;
-  return [frames, width, height](size_t index, bool with_depth) {
+  return [frames, width, height](size_t index) {
     IMUMATCH_CHECK(index < frames->size(), "frame index " << index);
     const FrameRecord& f = (*frames)[index];
-    FrameImages out;
-    out.image = LoadImage(f.image_path, ImageColor::kGray);
-    if (width > 0 && height > 0 && (out.image.cols != width || out.image.rows != height)) {
-      throw InputError(f.image_path, "image is " + std::to_string(out.image.cols) + "x" +
-                                         std::to_string(out.image.rows) + ", the camera is " +
+    cv::Mat image = LoadImage(f.image_path, ImageColor::kGray);
+    if (width > 0 && height > 0 && (image.cols != width || image.rows != height)) {
+      throw InputError(f.image_path, "image is " + std::to_string(image.cols) + "x" +
+                                         std::to_string(image.rows) + ", the camera is " +
                                          std::to_string(width) + "x" + std::to_string(height));
     }
+    return image;
+  };
+}
+
+std::function<cv::Mat(size_t)> MakeDiskDepthReader(const Dataset& dataset) {
+  auto frames = std::make_shared<std::vector<FrameRecord>>(dataset.frames);
+  const cv::Size size(dataset.camera.width, dataset.camera.height);
+  return [frames, size](size_t index) {
+    IMUMATCH_CHECK(index < frames->size(), "frame index " << index);
+    const FrameRecord& f = (*frames)[index];
+    return f.depth_path.empty() ? cv::Mat() : LoadDepth(f.depth_path, size);
+  };
+}
+
+FrameReader MakeDiskFrameReader(const Dataset& dataset) {
+  auto frames = std::make_shared<std::vector<FrameRecord>>(dataset.frames);
+  auto image_reader = MakeDiskImageReader(dataset);
+  return [frames, image_reader](size_t index, bool with_depth) {
+    FrameImages out;
+    out.image = image_reader(index);
+    const FrameRecord& f = (*frames)[index];
     if (with_depth && !f.depth_path.empty()) out.depth = LoadDepth(f.depth_path, out.image.size());
     return out;
   };
@@ -31,6 +51,8 @@ FrameReader MakeDiskFrameReader(const Dataset& dataset) {
 EvalSource MakeDiskSource(Dataset dataset) {
   EvalSource source;
   source.reader = MakeDiskFrameReader(dataset);
+  source.image_reader = MakeDiskImageReader(dataset);
+  source.depth_reader = MakeDiskDepthReader(dataset);
   source.exact_ground_truth = dataset.kind == DatasetKind::kSynthetic;
   source.dataset = std::move(dataset);
   return source;
@@ -67,11 +89,19 @@ EvalSource MakeSyntheticSource(const SyntheticSequence& sequence, const std::str
     cv::imencode(".png", f.depth, e.depth);
     encoded->push_back(std::move(e));
   }
-  source.reader = [encoded](size_t index, bool with_depth) {
+  source.image_reader = [encoded](size_t index) {
     IMUMATCH_CHECK(index < encoded->size(), "frame index " << index);
+    return cv::imdecode((*encoded)[index].image, cv::IMREAD_GRAYSCALE);
+  };
+  source.depth_reader = [encoded](size_t index) {
+    IMUMATCH_CHECK(index < encoded->size(), "frame index " << index);
+    return cv::imdecode((*encoded)[index].depth, cv::IMREAD_UNCHANGED);
+  };
+  source.reader = [image_reader = source.image_reader, depth_reader = source.depth_reader](
+                      size_t index, bool with_depth) {
     FrameImages out;
-    out.image = cv::imdecode((*encoded)[index].image, cv::IMREAD_GRAYSCALE);
-    if (with_depth) out.depth = cv::imdecode((*encoded)[index].depth, cv::IMREAD_UNCHANGED);
+    out.image = image_reader(index);
+    if (with_depth) out.depth = depth_reader(index);
     return out;
   };
   source.exact_ground_truth = true;

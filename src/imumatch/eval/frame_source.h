@@ -26,11 +26,18 @@ using FrameReader = std::function<FrameImages(size_t index, bool with_depth)>;
 struct EvalSource {
   Dataset dataset;
   FrameReader reader;
+  // The image and the depth of a frame on their own (both set by the makers below), so that a
+  // pipeline can decode them on two cores. An empty depth Mat when the frame has none.
+  std::function<cv::Mat(size_t index)> image_reader, depth_reader;
   bool exact_ground_truth = false;
 };
 
 // Reads FrameRecord::image_path / depth_path with io's LoadImage / LoadDepth (gray images).
 FrameReader MakeDiskFrameReader(const Dataset& dataset);
+// The same, one image at a time: the gray image (checked against the camera's size) and the
+// depth (checked against the camera's size; empty when the frame has no depth).
+std::function<cv::Mat(size_t)> MakeDiskImageReader(const Dataset& dataset);
+std::function<cv::Mat(size_t)> MakeDiskDepthReader(const Dataset& dataset);
 // The dataset as LoadDataset returns it, read from disk. Ground truth is exact for kSynthetic.
 EvalSource MakeDiskSource(Dataset dataset);
 // An in-memory synthetic sequence (no files): the frames are PNG-encoded once here so that the

@@ -520,10 +520,17 @@ nlohmann::json ReportToJson(const EvaluationResult& result, const ReportContext&
     j["end_to_end"] = {{"frames", e.frames},
                        {"width", e.width},
                        {"height", e.height},
+                       {"threads", e.threads},
                        {"sequential_ms_per_frame", e.sequential_ms_per_frame},
-                       {"pipelined_ms_per_frame", e.pipelined_ms_per_frame},
+                       {"sequential_latency_ms", e.sequential_latency_ms},
+                       {"imumatch_ms_per_frame", e.imumatch_ms_per_frame},
+                       {"imumatch_latency_ms", e.imumatch_latency_ms},
+                       {"overlapped_ms_per_frame", e.overlapped_ms_per_frame},
+                       {"overlapped_latency_ms", e.overlapped_latency_ms},
+                       {"throughput_ratio", e.Throughput()},
+                       {"latency_ratio", e.LatencyRatio()},
                        {"sequential_matches", e.sequential_matches},
-                       {"pipelined_matches", e.pipelined_matches},
+                       {"imumatch_matches", e.imumatch_matches},
                        {"motion_failures", e.motion_failures}};
   } else {
     j["end_to_end"] = nullptr;

@@ -8,6 +8,7 @@
 #include "imumatch/core/error.h"
 #include "imumatch/features/brief.h"
 #include "imumatch/features/image_util.h"
+#include "imumatch/features/orb_split.h"
 
 namespace imumatch {
 namespace {
@@ -116,6 +117,8 @@ void FeatureOptions::Check() const {
   IMUMATCH_CHECK(
       orb_fast_threshold >= 1 && orb_fast_threshold <= 255,
       "FeatureOptions.orb_fast_threshold must be in [1, 255], got " << orb_fast_threshold);
+  IMUMATCH_CHECK(threads >= 1 && threads <= 256,
+                 "FeatureOptions.threads must be in [1, 256], got " << threads);
   IMUMATCH_CHECK(fast_threshold >= 1 && fast_threshold <= 255,
                  "FeatureOptions.fast_threshold must be in [1, 255], got " << fast_threshold);
   IMUMATCH_CHECK(std::isfinite(akaze_threshold) && akaze_threshold > 0,
@@ -168,6 +171,14 @@ Features ExtractFeatures(const cv::Mat& image, const FeatureOptions& options) {
         keypoints.resize(options.max_keypoints);
       }
       feature2d->compute(gray, keypoints, descriptors);
+    } else if (options.kind == DetectorKind::kOrb && options.threads >= 2 &&
+               options.orb_n_levels >= 2) {
+      OrbSplitParams p;
+      p.max_keypoints = options.max_keypoints;
+      p.scale_factor = static_cast<float>(options.orb_scale_factor);
+      p.n_levels = options.orb_n_levels;
+      p.fast_threshold = options.orb_fast_threshold;
+      DetectAndComputeOrbSplit(gray, p, &keypoints, &descriptors);
     } else {
       feature2d->detectAndCompute(gray, cv::noArray(), keypoints, descriptors);
     }
@@ -186,13 +197,21 @@ Features ExtractFeatures(const cv::Mat& image, const FeatureOptions& options) {
     out.descriptors = cv::Mat(0, feature2d->descriptorSize(), feature2d->descriptorType());
     return out;
   }
-  // Strongest first, at most max_keypoints (SIFT and ORB may return a few more on ties).
+  return StrongestFirst(keypoints, descriptors, options.max_keypoints);
+}
+
+Features StrongestFirst(const std::vector<cv::KeyPoint>& keypoints, const cv::Mat& descriptors,
+                        int max_keypoints) {
+  IMUMATCH_CHECK(descriptors.rows == static_cast<int>(keypoints.size()),
+                 descriptors.rows << " descriptors for " << keypoints.size() << " keypoints");
+  IMUMATCH_CHECK(max_keypoints >= 0, "max_keypoints = " << max_keypoints);
   std::vector<int> order(keypoints.size());
   std::iota(order.begin(), order.end(), 0);
   std::stable_sort(order.begin(), order.end(), [&keypoints](int a, int b) {
     return keypoints[a].response > keypoints[b].response;
   });
-  if (static_cast<int>(order.size()) > options.max_keypoints) order.resize(options.max_keypoints);
+  if (static_cast<int>(order.size()) > max_keypoints) order.resize(max_keypoints);
+  Features out;
   out.keypoints.reserve(order.size());
   out.descriptors.create(static_cast<int>(order.size()), descriptors.cols, descriptors.type());
   for (size_t i = 0; i < order.size(); ++i) {

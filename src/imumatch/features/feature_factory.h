@@ -39,6 +39,10 @@ struct FeatureOptions {
   double orb_scale_factor = 1.2;
   int orb_n_levels = 8;
   int orb_fast_threshold = 20;
+  // ORB: with 2 or more, the pyramid levels are split between two tasks on OpenCV's thread pool
+  // (DetectAndComputeOrbSplit: the same detector up to the rounding of the deeper levels' sizes).
+  // Other kinds ignore it (OpenCV parallelises inside some of them on its own).
+  int threads = 1;
   // FAST + BRIEF: FAST-9/16 threshold with non-maximum suppression.
   int fast_threshold = 20;
   // AKAZE (cv::AKAZE, MLDB descriptor): detector response threshold (OpenCV default 0.001).
@@ -66,5 +70,11 @@ struct Features {
 // InvalidArgument for an empty image, another pixel type, options failing Check(), or when an
 // OpenCV detector rejects the image (cv::Exception is translated, e.g. for tiny images).
 Features ExtractFeatures(const cv::Mat& image, const FeatureOptions& options);
+
+// The at most max_keypoints strongest features (largest response first, ties in input order):
+// how ExtractFeatures orders and caps every detector's output, for callers that detect in parts.
+// Throws InvalidArgument when the descriptor rows do not match the keypoints.
+Features StrongestFirst(const std::vector<cv::KeyPoint>& keypoints, const cv::Mat& descriptors,
+                        int max_keypoints);
 
 }  // namespace imumatch
