@@ -733,6 +733,46 @@ void PrintLinearity(const CapturingReporter& rep) {
       ratio("BM_GuidedStreamOfPairs/sift:1/n:1000", "BM_GuidedStreamOfPairs/sift:0/n:1000"));
 }
 
+// Issue #13's table: the speed targets, measured in this process (the end-to-end row is
+// end_to_end_benchmark's, in eval).
+void PrintTargets(const CapturingReporter& rep) {
+  const auto get = [&rep](const std::string& name) {
+    auto it = rep.times_us.find(name);
+    return it == rep.times_us.end() ? -1.0 : it->second;
+  };
+  const auto per_kp = [&](const std::string& name) {
+    auto k = rep.kps.find(name);
+    const double t = get(name);
+    return t > 0 && k != rep.kps.end() && k->second > 0 ? 1000.0 * t / k->second : -1.0;
+  };
+  const auto ratio = [](double a, double b) { return a > 0 && b > 0 ? a / b : -1.0; };
+  std::printf("\nSpeed targets (wall time, one thread, fastest repetition):\n");
+  std::printf("%-62s %12s %10s\n", "", "measured", "target");
+  for (int n : {1000, 4000}) {
+    const std::string args = "/sift:0/n:" + std::to_string(n);
+    const double knn = get("BM_CvKnnRatio" + args), own = get("BM_OwnBruteForceRatio" + args);
+    std::printf(
+        "%-62s %11.1fx %10s\n",
+        ("own brute force + ratio vs cv::BFMatcher knnMatch, ORB " + std::to_string(n)).c_str(),
+        ratio(knn, own), ">= 20x");
+  }
+  std::printf("%-62s %11.2fx %10s\n", "guided ns/keypoint 8000 / 1000, stream of pairs (TUM)",
+              ratio(per_kp("BM_GuidedStreamOfPairs/sift:0/n:8000"),
+                    per_kp("BM_GuidedStreamOfPairs/sift:0/n:1000")),
+              "<= 1.3x");
+  std::printf("%-62s %11.2fx %10s\n", "  same, constant density (same candidates per window)",
+              ratio(per_kp("BM_GuidedSearchConstantDensity/n:8000"),
+                    per_kp("BM_GuidedSearchConstantDensity/n:1000")),
+              "<= 1.3x");
+  std::printf("%-62s %11.2fx %10s\n", "  same, one pair repeated every iteration",
+              ratio(per_kp("BM_Guided/sift:0/n:8000"), per_kp("BM_Guided/sift:0/n:1000")),
+              "<= 1.3x");
+  std::printf("%-62s %11.2fx %10s\n", "guided SIFT-1000 / guided ORB-1000, stream of pairs",
+              ratio(get("BM_GuidedStreamOfPairs/sift:1/n:1000"),
+                    get("BM_GuidedStreamOfPairs/sift:0/n:1000")),
+              "<= 1.5x");
+}
+
 void PrintSummary(const CapturingReporter& rep) {
   PrintTrackingSummary(rep.times_us);
   PrintTable(rep, rep.times_us, "Real (wall) time");
@@ -797,6 +837,7 @@ void PrintSummary(const CapturingReporter& rep) {
                   l, l / g);
     }
   }
+  PrintTargets(rep);
 }
 
 }  // namespace
