@@ -105,6 +105,29 @@ PassTiming SequentialOpenCvPass(const EvalSource& source, const EvaluationOption
   return pass;
 }
 
+// Matches frame `index` (cur) with frame index - 1 (prev, with its depth): guided with the pair's
+// IMU motion, or brute force when there is none. Adds to the pass's counts.
+void MatchWithPrevious(const Dataset& dataset, size_t index, size_t pair_index,
+                       const EvaluationOptions& options, const ImuBiasEstimate& bias,
+                       const Features& prev, const cv::Mat& prev_depth, const Features& cur,
+                       GuidedMatcherWorkspace* workspace, PassTiming* pass) {
+  std::string reason;
+  const std::optional<PairMotion> motion =
+      (dataset.frames[index - 1].world_from_cam && dataset.frames[index].world_from_cam)
+          ? ComputePairMotion(dataset, {index - 1, index}, pair_index, options, bias, reason)
+          : std::nullopt;
+  if (motion) {
+    const MatchResult r = workspace->Match(dataset.camera, motion->motion, prev.keypoints,
+                                           prev.descriptors, prev_depth, cur.keypoints,
+                                           cur.descriptors, options.prediction, options.guided);
+    pass->matches += static_cast<int>(r.matches.size());
+  } else {
+    ++pass->motion_failures;
+    pass->matches += static_cast<int>(
+        MatchOpenCvKnnRatio(prev.descriptors, cur.descriptors, options.ratio).size());
+  }
+}
+
 PassTiming ImumatchPass(const EvalSource& source, const EvaluationOptions& options,
                         const EndToEndOptions& e2e, size_t n, const ImuBiasEstimate& bias) {
   const Dataset& dataset = source.dataset;
@@ -127,21 +150,7 @@ PassTiming ImumatchPass(const EvalSource& source, const EvaluationOptions& optio
             [&] { depth = source.depth_reader(index); });
     cur = ExtractFeatures(image, fopts);
     if (i > 0) {
-      std::string reason;
-      const std::optional<PairMotion> motion =
-          (dataset.frames[index - 1].world_from_cam && dataset.frames[index].world_from_cam)
-              ? ComputePairMotion(dataset, {index - 1, index}, i, options, bias, reason)
-              : std::nullopt;
-      if (motion) {
-        const MatchResult r = workspace.Match(dataset.camera, motion->motion, prev.keypoints,
-                                              prev.descriptors, prev_depth, cur.keypoints,
-                                              cur.descriptors, options.prediction, options.guided);
-        pass.matches += static_cast<int>(r.matches.size());
-      } else {
-        ++pass.motion_failures;
-        pass.matches += static_cast<int>(
-            MatchOpenCvKnnRatio(prev.descriptors, cur.descriptors, options.ratio).size());
-      }
+      MatchWithPrevious(dataset, index, i, options, bias, prev, prev_depth, cur, &workspace, &pass);
     }
     latency_sum += MsSince(frame_start);
     std::swap(prev, cur);
@@ -205,22 +214,8 @@ PassTiming OverlappedPass(const EvalSource& source, const EvaluationOptions& opt
     MergeOrbSplitParts(part_kp, part_desc, &merged, &merged_desc);
     cur = StrongestFirst(merged, merged_desc, e2e.max_keypoints);  // as ExtractFeatures does
     if (k > 0) {
-      const size_t index = e2e.first_frame + k;
-      std::string reason;
-      const std::optional<PairMotion> motion =
-          (dataset.frames[index - 1].world_from_cam && dataset.frames[index].world_from_cam)
-              ? ComputePairMotion(dataset, {index - 1, index}, k, options, bias, reason)
-              : std::nullopt;
-      if (motion) {
-        const MatchResult r = workspace.Match(dataset.camera, motion->motion, prev.keypoints,
-                                              prev.descriptors, depth[(k - 1) % 2], cur.keypoints,
-                                              cur.descriptors, options.prediction, options.guided);
-        pass.matches += static_cast<int>(r.matches.size());
-      } else {
-        ++pass.motion_failures;
-        pass.matches += static_cast<int>(
-            MatchOpenCvKnnRatio(prev.descriptors, cur.descriptors, options.ratio).size());
-      }
+      MatchWithPrevious(dataset, e2e.first_frame + k, k, options, bias, prev, depth[(k - 1) % 2],
+                        cur, &workspace, &pass);
     }
     latency_sum += MsSince(started[k]);
     std::swap(prev, cur);
