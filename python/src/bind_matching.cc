@@ -142,6 +142,9 @@ void BindMatching(py::module_& m) {
                      "AKAZE detector response threshold.")
       .def_readwrite("brisk_threshold", &FeatureOptions::brisk_threshold, "BRISK AGAST threshold.")
       .def_readwrite("brisk_octaves", &FeatureOptions::brisk_octaves, "BRISK octaves.")
+      .def_readwrite("threads", &FeatureOptions::threads,
+                     "ORB: with 2 or more, the pyramid levels are split between two tasks on "
+                     "OpenCV's thread pool (levels below the split identical to cv::ORB).")
       .def("check", &FeatureOptions::Check,
            "Raises InvalidArgument (a ValueError) when a value is out of range.");
   m.def(

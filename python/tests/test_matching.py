@@ -128,6 +128,16 @@ def test_feature_kinds_and_zero_copy_descriptors():
     opts.max_keypoints = 200
     kps, _ = imumatch.extract_features(gray, options=opts)
     assert len(kps) <= 200
+    # ORB split between two tasks: as many features, strongest first, mostly the same positions.
+    opts.threads = 2
+    split, _ = imumatch.extract_features(gray, options=opts)
+    assert len(split) == len(kps)
+    assert (np.diff(split[:, 4]) <= 0).all()  # response column, non-increasing
+    same = {(round(x, 2), round(y, 2)) for x, y in kps[:, :2]}
+    assert sum((round(x, 2), round(y, 2)) in same for x, y in split[:, :2]) >= 0.8 * len(kps)
+    opts.threads = 0
+    with pytest.raises(ValueError):
+        opts.check()
     # Every brute-force path this CPU runs gives the same matches.
     _, d2 = imumatch.extract_features(gray, "sift", 300)
     for desc in (d1 := imumatch.extract_features(gray, "orb", 500)[1], d2):
