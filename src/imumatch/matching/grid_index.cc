@@ -63,6 +63,32 @@ void GridIndex::Build(const std::vector<KeypointInfo>& keypoints, int width, int
                sizeof(KeypointInfo), static_cast<int>(keypoints.size()), width, height, cell_size);
 }
 
+void GridIndex::AppendSlotsInBox(int begin, int end, float min_x, float max_x, float min_y,
+                                 float max_y, std::vector<int>* out) const {
+  const size_t base = out->size();
+  out->resize(base + static_cast<size_t>(end - begin));
+  int* dst = out->data() + base;
+  size_t count = 0;
+  for (int k = begin; k < end; ++k) {
+    const float x = xy_[2 * k], y = xy_[2 * k + 1];
+    dst[count] = k;
+    count += static_cast<size_t>((x >= min_x) & (x <= max_x) & (y >= min_y) & (y <= max_y));
+  }
+  out->resize(base + count);
+}
+
+size_t GridIndex::CollectSlotsInBox(float min_x, float min_y, float max_x, float max_y,
+                                    std::vector<int>* out) const {
+  out->clear();
+  size_t scanned = 0;
+  ForEachRunInBox(min_x, min_y, max_x, max_y,
+                  [&](int begin, int end, float lo_x, float hi_x, float lo_y, float hi_y) {
+                    scanned += static_cast<size_t>(end - begin);
+                    AppendSlotsInBox(begin, end, lo_x, hi_x, lo_y, hi_y, out);
+                  });
+  return scanned;
+}
+
 size_t GridIndex::CollectSlotsInCapsule(float x0, float y0, float x1, float y1, float radius,
                                         float min_x, float min_y, float max_x, float max_y,
                                         std::vector<int>* out) const {
@@ -71,10 +97,7 @@ size_t GridIndex::CollectSlotsInCapsule(float x0, float y0, float x1, float y1, 
   ForEachRunInCapsule(x0, y0, x1, y1, radius, min_x, min_y, max_x, max_y,
                       [&](int begin, int end, float lo_x, float hi_x, float lo_y, float hi_y) {
                         scanned += static_cast<size_t>(end - begin);
-                        for (int k = begin; k < end; ++k) {
-                          const float x = xy_[2 * k], y = xy_[2 * k + 1];
-                          if (x >= lo_x && x <= hi_x && y >= lo_y && y <= hi_y) out->push_back(k);
-                        }
+                        AppendSlotsInBox(begin, end, lo_x, hi_x, lo_y, hi_y, out);
                       });
   return scanned;
 }

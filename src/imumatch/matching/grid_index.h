@@ -32,45 +32,33 @@ class GridIndex {
   // (closed box). index is the point's position in the arrays given to Build.
   template <typename F>
   void ForEachInBox(float min_x, float min_y, float max_x, float max_y, F&& f) const {
-    if (index_.empty() || !(min_x <= max_x) || !(min_y <= max_y)) return;
-    const int c0 = CellCol(min_x), c1 = CellCol(max_x);
-    const int r0 = CellRow(min_y), r1 = CellRow(max_y);
     // The box test is branch-free: slots are appended to a small buffer and the buffer is handed to
     // f afterwards (about half the scanned points fail the test, a branch would mispredict a lot).
     constexpr int kBuffer = 64;
     int hits[kBuffer];
     int count = 0;
-    for (int r = r0; r <= r1; ++r) {
-      const int row_base = r * cols_;
-      const int begin = cell_start_[row_base + c0];
-      const int end = cell_start_[row_base + c1 + 1];  // the cells of a row are contiguous
-      for (int k = begin; k < end; ++k) {
-        const float x = xy_[2 * k], y = xy_[2 * k + 1];
-        hits[count] = k;
-        count += static_cast<int>((x >= min_x) & (x <= max_x) & (y >= min_y) & (y <= max_y));
-        if (count == kBuffer) {
-          for (int h = 0; h < count; ++h)
-            f(index_[hits[h]], xy_[2 * hits[h]], xy_[2 * hits[h] + 1]);
-          count = 0;
-        }
-      }
-    }
-    for (int h = 0; h < count; ++h) f(index_[hits[h]], xy_[2 * hits[h]], xy_[2 * hits[h] + 1]);
+    const auto flush = [&] {
+      for (int h = 0; h < count; ++h) f(index_[hits[h]], xy_[2 * hits[h]], xy_[2 * hits[h] + 1]);
+      count = 0;
+    };
+    ForEachRunInBox(
+        min_x, min_y, max_x, max_y, [&](int begin, int end, float, float, float, float) {
+          for (int k = begin; k < end; ++k) {
+            const float x = xy_[2 * k], y = xy_[2 * k + 1];
+            hits[count] = k;
+            count += static_cast<int>((x >= min_x) & (x <= max_x) & (y >= min_y) & (y <= max_y));
+            if (count == kBuffer) flush();
+          }
+        });
+    flush();
   }
 
-  // Replaces *out with the indices of the points inside the closed box (in grid order). The
-  // buffer's capacity is reused across calls; the box test is branch-free. Returns the number of
-  // points read (the work done: the points of every cell the box touches).
-  size_t CollectInBox(float min_x, float min_y, float max_x, float max_y,
-                      std::vector<int>* out) const {
-    return Collect<true>(min_x, min_y, max_x, max_y, out);
-  }
-  // The same, but returns slots: positions in the grid's cell-sorted order (slot_index(slot) is the
-  // point's original index). Data copied into slot order is read contiguously by window queries.
+  // Replaces *out with the slots of the points inside the closed box, in grid order: positions in
+  // the grid's cell-sorted order (slot_index(slot) is the point's original index; data copied into
+  // slot order is read contiguously by window queries). The buffer's capacity is reused across
+  // calls. Returns the number of points read (the points of every cell the box touches).
   size_t CollectSlotsInBox(float min_x, float min_y, float max_x, float max_y,
-                           std::vector<int>* out) const {
-    return Collect<false>(min_x, min_y, max_x, max_y, out);
-  }
+                           std::vector<int>* out) const;
   // Slots of the points inside the capsule {p : distance(p, segment (x0,y0)-(x1,y1)) <= radius}
   // clipped to the closed box, as a superset: each cell row is scanned only over the x-range the
   // capsule covers within that row's band, so a long oblique segment reads O(length x radius)
@@ -82,7 +70,7 @@ class GridIndex {
   // f(begin, end, min_x, max_x, min_y, max_y) with the contiguous slots [begin, end) of the cells
   // it spans in that row and the closed box that the row's points must lie in (a superset test:
   // the capsule's exact test is the caller's). Callers that keep data in slot order then test the
-  // slots of a run in one vectorisable loop.
+  // slots of a run in one tight loop.
   template <typename F>
   void ForEachRunInBox(float min_x, float min_y, float max_x, float max_y, F&& f) const {
     if (index_.empty() || !(min_x <= max_x) || !(min_y <= max_y)) return;
@@ -133,8 +121,6 @@ class GridIndex {
       if (begin < end) f(begin, end, row_min_x, row_max_x, band_lo, band_hi);
     }
   }
-  // The grid's coordinates in slot order (x of slot s at 2 s, y at 2 s + 1).
-  const float* slot_xy() const { return xy_.data(); }
   int slot_index(int slot) const { return index_[slot]; }
   // Row-major cell id of a position (clamped into the grid).
   int CellOf(float x, float y) const { return CellRow(y) * cols_ + CellCol(x); }
@@ -144,31 +130,9 @@ class GridIndex {
   std::vector<int> QueryBox(float min_x, float min_y, float max_x, float max_y) const;
 
  private:
-  template <bool kOriginalIndex>
-  size_t Collect(float min_x, float min_y, float max_x, float max_y, std::vector<int>* out) const {
-    out->clear();
-    if (index_.empty() || !(min_x <= max_x) || !(min_y <= max_y)) return 0;
-    const int c0 = CellCol(min_x), c1 = CellCol(max_x);
-    const int r0 = CellRow(min_y), r1 = CellRow(max_y);
-    size_t scanned = 0;
-    for (int r = r0; r <= r1; ++r) {
-      scanned += cell_start_[r * cols_ + c1 + 1] - cell_start_[r * cols_ + c0];
-    }
-    out->resize(scanned);
-    int* dst = out->data();
-    size_t count = 0;
-    for (int r = r0; r <= r1; ++r) {
-      const int begin = cell_start_[r * cols_ + c0];
-      const int end = cell_start_[r * cols_ + c1 + 1];
-      for (int k = begin; k < end; ++k) {
-        const float x = xy_[2 * k], y = xy_[2 * k + 1];
-        dst[count] = kOriginalIndex ? index_[k] : k;
-        count += static_cast<size_t>((x >= min_x) & (x <= max_x) & (y >= min_y) & (y <= max_y));
-      }
-    }
-    out->resize(count);
-    return scanned;
-  }
+  // Appends to *out the slots of [begin, end) inside the closed box (branch-free).
+  void AppendSlotsInBox(int begin, int end, float min_x, float max_x, float min_y, float max_y,
+                        std::vector<int>* out) const;
 
   void BuildStrided(const unsigned char* xs, const unsigned char* ys, size_t stride, int n,
                     int width, int height, float cell_size);

@@ -136,8 +136,8 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
   const float inf = std::numeric_limits<float>::infinity();
   const bool rivals_all = options.inconsistent_candidates_in_ratio;
 
-  // B's keypoints (as arrays of x, y, angle, size) and descriptors copied into the grid's cell
-  // order: a window's candidates are then contiguous runs of slots, tested in vectorised loops
+  // B's keypoints (as 16-byte records of x, y, angle, size) and descriptors copied into the grid's
+  // cell order: a window's candidates are then contiguous runs of slots, tested in tight loops
   // (O(m) copy, a few us per 1000). Angles are normalised into [0, 360) once here (no angle: -1),
   // sizes that are not positive numbers become 0 (no size check), as the tests below expect.
   std::vector<GuidedSearchScratch::Candidate>& cand_b = scratch->candidates_b;
@@ -180,8 +180,7 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
   const float ref_b = ReferenceKeypointSize(keypoints_b);
 
   // The queries with a window are visited in the grid's cell order of their windows (a counting
-  // sort, O(n + cells), by tiles of cells): consecutive windows then read neighbouring slots of B,
-  // and the per-query
+  // sort, O(n + cells)): consecutive windows then read neighbouring slots of B, and the per-query
   // results are written in visiting order, so the search touches B's arrays almost as a stream.
   // Only the query's own records (prediction, keypoint, descriptor) are read out of order, and
   // they are prefetched a few queries ahead. In A's order, every window would read a random part
@@ -191,20 +190,7 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
   std::vector<int>& position_of = scratch->position_of;  // query index -> visiting position
   position_of.assign(n, -1);                             // (-1: no window)
   {
-    // Visiting key: tiles of kTile x kTile cells in row-major order, and the cells of a tile in
-    // row-major order. A row-major sweep over the whole grid would come back to a row of B's
-    // data only after a whole image width of queries (its reuse distance grows with the image,
-    // and past L2's size every window reads from L3); a tile's windows read a bounded patch of B.
-    constexpr int kTile = 8;
-    const int grid_cols = grid_b.cols();
-    const int tiles_x = (grid_cols + kTile - 1) / kTile;
-    const int tiles_y = (grid_b.rows() + kTile - 1) / kTile;
-    const int cells = tiles_x * tiles_y * kTile * kTile;
-    const auto visit_key = [&](int c) {
-      const int r = c / grid_cols, col = c % grid_cols;
-      return ((r / kTile) * tiles_x + col / kTile) * (kTile * kTile) + (r % kTile) * kTile +
-             col % kTile;
-    };
+    const int cells = grid_b.num_cells();
     std::vector<int>&start = scratch->cell_start, &cell = scratch->cell;
     start.assign(static_cast<size_t>(cells) + 1, 0);
     cell.assign(n, -1);
@@ -230,7 +216,7 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
           result.outcomes[i] = QueryOutcome::kNoPrediction;
           continue;
       }
-      cell[i] = visit_key(grid_b.CellOf(0.5f * (p.min_x + p.max_x), 0.5f * (p.min_y + p.max_y)));
+      cell[i] = grid_b.CellOf(0.5f * (p.min_x + p.max_x), 0.5f * (p.min_y + p.max_y));
       ++start[cell[i] + 1];
     }
     for (int c = 0; c < cells; ++c) start[c + 1] += start[c];
