@@ -1,7 +1,6 @@
 #include "imumatch/eval/end_to_end.h"
 
 #include <algorithm>
-#include <exception>
 #include <iomanip>
 #include <limits>
 #include <sstream>
@@ -14,6 +13,7 @@
 #include "imumatch/core/time.h"
 #include "imumatch/eval/pair_motion.h"
 #include "imumatch/features/orb_split.h"
+#include "imumatch/features/parallel_tasks.h"
 #include "imumatch/matching/baseline_matchers.h"
 
 namespace imumatch {
@@ -43,29 +43,6 @@ std::string EndToEndTiming::Describe() const {
 
 namespace {
 
-// Runs first() and second() at once on OpenCV's thread pool (one after the other when the pool
-// has a single thread); rethrows the first exception in the caller.
-template <typename F0, typename F1>
-void RunBoth(F0&& first, F1&& second) {
-  std::exception_ptr errors[2];
-  cv::parallel_for_(cv::Range(0, 2), [&](const cv::Range& range) {
-    for (int task = range.start; task < range.end; ++task) {
-      try {
-        if (task == 0) {
-          first();
-        } else {
-          second();
-        }
-      } catch (...) {
-        errors[task] = std::current_exception();
-      }
-    }
-  });
-  for (const std::exception_ptr& e : errors) {
-    if (e) std::rethrow_exception(e);
-  }
-}
-
 struct PassTiming {
   double ms_per_frame = 0.0;
   double latency_ms = 0.0;
@@ -77,7 +54,6 @@ PassTiming SequentialOpenCvPass(const EvalSource& source, const EvaluationOption
                                 const EndToEndOptions& e2e, size_t n, cv::Size* size) {
   PassTiming pass;
   cv::Ptr<cv::ORB> orb = cv::ORB::create(e2e.max_keypoints);
-  cv::BFMatcher matcher(cv::NORM_HAMMING);
   std::vector<cv::KeyPoint> kp_prev, kp;
   cv::Mat desc_prev, desc;
   double latency_sum = 0.0;
@@ -87,14 +63,8 @@ PassTiming SequentialOpenCvPass(const EvalSource& source, const EvaluationOption
     const cv::Mat image = source.image_reader(e2e.first_frame + i);
     *size = image.size();
     orb->detectAndCompute(image, cv::noArray(), kp, desc);
-    if (i > 0 && !desc.empty() && !desc_prev.empty()) {
-      std::vector<std::vector<cv::DMatch>> knn;
-      matcher.knnMatch(desc_prev, desc, knn, 2);
-      for (const auto& m : knn) {
-        if (m.size() == 1 || (m.size() >= 2 && m[0].distance < options.ratio * m[1].distance)) {
-          ++pass.matches;
-        }
-      }
+    if (i > 0) {
+      pass.matches += static_cast<int>(MatchOpenCvKnnRatio(desc_prev, desc, options.ratio).size());
     }
     latency_sum += MsSince(frame_start);
     std::swap(kp_prev, kp);
@@ -146,8 +116,13 @@ PassTiming ImumatchPass(const EvalSource& source, const EvaluationOptions& optio
     const auto frame_start = SteadyClock::now();
     // The depth is needed only when this frame is A of the next pair, but decoding it next to the
     // image uses the second core while the image decodes.
-    RunBoth([&] { image = source.image_reader(index); },
-            [&] { depth = source.depth_reader(index); });
+    RunTasks(2, [&](int task) {
+      if (task == 0) {
+        image = source.image_reader(index);
+      } else {
+        depth = source.depth_reader(index);
+      }
+    });
     cur = ExtractFeatures(image, fopts);
     if (i > 0) {
       MatchWithPrevious(dataset, index, i, options, bias, prev, prev_depth, cur, &workspace, &pass);
@@ -168,11 +143,8 @@ PassTiming OverlappedPass(const EvalSource& source, const EvaluationOptions& opt
                           const EndToEndOptions& e2e, size_t n, const ImuBiasEstimate& bias) {
   const Dataset& dataset = source.dataset;
   PassTiming pass;
-  OrbSplitParams orb;
+  OrbSplitParams orb = ToOrbSplitParams(options.features);
   orb.max_keypoints = e2e.max_keypoints;
-  orb.scale_factor = static_cast<float>(options.features.orb_scale_factor);
-  orb.n_levels = options.features.orb_n_levels;
-  orb.fast_threshold = options.features.orb_fast_threshold;
   GuidedMatcherWorkspace workspace;
   cv::Mat image[2], depth[2];  // by frame parity
   Features prev, cur;
@@ -184,30 +156,17 @@ PassTiming OverlappedPass(const EvalSource& source, const EvaluationOptions& opt
   for (size_t t = 0; t <= n; ++t) {
     if (t < n) started[t] = SteadyClock::now();
     const size_t k = t - 1;  // the frame described in this step (when t >= 1)
-    std::exception_ptr errors[4];
-    cv::parallel_for_(
-        cv::Range(0, 4),
-        [&](const cv::Range& range) {
-          for (int task = range.start; task < range.end; ++task) {
-            try {
-              if (task == 0 && t < n) image[t % 2] = source.image_reader(e2e.first_frame + t);
-              if (t == 0) continue;
-              if (task == 1) {
-                DetectAndComputeOrbPart(image[k % 2], orb, 0, &part_kp[0], &part_desc[0]);
-              } else if (task == 2) {
-                depth[k % 2] = source.depth_reader(e2e.first_frame + k);
-              } else if (task == 3) {
-                DetectAndComputeOrbPart(image[k % 2], orb, 1, &part_kp[1], &part_desc[1]);
-              }
-            } catch (...) {
-              errors[task] = std::current_exception();
-            }
-          }
-        },
-        4);
-    for (const std::exception_ptr& e : errors) {
-      if (e) std::rethrow_exception(e);
-    }
+    RunTasks(4, [&](int task) {
+      if (task == 0 && t < n) image[t % 2] = source.image_reader(e2e.first_frame + t);
+      if (t == 0) return;
+      if (task == 1) {
+        DetectAndComputeOrbPart(image[k % 2], orb, 0, &part_kp[0], &part_desc[0]);
+      } else if (task == 2) {
+        depth[k % 2] = source.depth_reader(e2e.first_frame + k);
+      } else if (task == 3) {
+        DetectAndComputeOrbPart(image[k % 2], orb, 1, &part_kp[1], &part_desc[1]);
+      }
+    });
     if (t == 0) continue;
     std::vector<cv::KeyPoint> merged;
     cv::Mat merged_desc;
@@ -253,17 +212,17 @@ EndToEndTiming MeasureEndToEnd(const EvalSource& source, const EvaluationOptions
     const PassTiming s = SequentialOpenCvPass(source, options, e2e, n, &size);
     const PassTiming m = ImumatchPass(source, options, e2e, n, bias);
     const PassTiming o = OverlappedPass(source, options, e2e, n, bias);
-    timing.overlapped_ms_per_frame = std::min(timing.overlapped_ms_per_frame, o.ms_per_frame);
-    timing.overlapped_latency_ms = std::min(timing.overlapped_latency_ms, o.latency_ms);
-    timing.overlapped_matches = o.matches;
     timing.width = size.width;
     timing.height = size.height;
     timing.sequential_ms_per_frame = std::min(timing.sequential_ms_per_frame, s.ms_per_frame);
     timing.sequential_latency_ms = std::min(timing.sequential_latency_ms, s.latency_ms);
     timing.imumatch_ms_per_frame = std::min(timing.imumatch_ms_per_frame, m.ms_per_frame);
     timing.imumatch_latency_ms = std::min(timing.imumatch_latency_ms, m.latency_ms);
+    timing.overlapped_ms_per_frame = std::min(timing.overlapped_ms_per_frame, o.ms_per_frame);
+    timing.overlapped_latency_ms = std::min(timing.overlapped_latency_ms, o.latency_ms);
     timing.sequential_matches = s.matches;
     timing.imumatch_matches = m.matches;
+    timing.overlapped_matches = o.matches;
     timing.motion_failures = m.motion_failures;
   }
   return timing;

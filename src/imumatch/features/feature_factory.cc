@@ -8,7 +8,6 @@
 #include "imumatch/core/error.h"
 #include "imumatch/features/brief.h"
 #include "imumatch/features/image_util.h"
-#include "imumatch/features/orb_split.h"
 
 namespace imumatch {
 namespace {
@@ -173,12 +172,7 @@ Features ExtractFeatures(const cv::Mat& image, const FeatureOptions& options) {
       feature2d->compute(gray, keypoints, descriptors);
     } else if (options.kind == DetectorKind::kOrb && options.threads >= 2 &&
                options.orb_n_levels >= 2) {
-      OrbSplitParams p;
-      p.max_keypoints = options.max_keypoints;
-      p.scale_factor = static_cast<float>(options.orb_scale_factor);
-      p.n_levels = options.orb_n_levels;
-      p.fast_threshold = options.orb_fast_threshold;
-      DetectAndComputeOrbSplit(gray, p, &keypoints, &descriptors);
+      DetectAndComputeOrbSplit(gray, ToOrbSplitParams(options), &keypoints, &descriptors);
     } else {
       feature2d->detectAndCompute(gray, cv::noArray(), keypoints, descriptors);
     }
@@ -198,6 +192,15 @@ Features ExtractFeatures(const cv::Mat& image, const FeatureOptions& options) {
     return out;
   }
   return StrongestFirst(keypoints, descriptors, options.max_keypoints);
+}
+
+OrbSplitParams ToOrbSplitParams(const FeatureOptions& options) {
+  OrbSplitParams p;
+  p.max_keypoints = options.max_keypoints;
+  p.scale_factor = static_cast<float>(options.orb_scale_factor);
+  p.n_levels = options.orb_n_levels;
+  p.fast_threshold = options.orb_fast_threshold;
+  return p;
 }
 
 Features StrongestFirst(const std::vector<cv::KeyPoint>& keypoints, const cv::Mat& descriptors,

@@ -7,6 +7,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
 
+#include "imumatch/features/orb_split.h"
 #include "imumatch/features/surf.h"
 
 namespace imumatch {
@@ -70,6 +71,9 @@ struct Features {
 // InvalidArgument for an empty image, another pixel type, options failing Check(), or when an
 // OpenCV detector rejects the image (cv::Exception is translated, e.g. for tiny images).
 Features ExtractFeatures(const cv::Mat& image, const FeatureOptions& options);
+
+// The ORB settings of options as DetectAndComputeOrbSplit / DetectAndComputeOrbPart take them.
+OrbSplitParams ToOrbSplitParams(const FeatureOptions& options);
 
 // The at most max_keypoints strongest features (largest response first, ties in input order):
 // how ExtractFeatures orders and caps every detector's output, for callers that detect in parts.

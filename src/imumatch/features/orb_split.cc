@@ -2,11 +2,11 @@
 
 #include <cmath>
 
-#include <opencv2/core/utility.hpp>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "imumatch/core/error.h"
+#include "imumatch/features/parallel_tasks.h"
 
 namespace imumatch {
 
@@ -94,25 +94,10 @@ void MergeOrbSplitParts(std::vector<cv::KeyPoint> (&keypoints)[2], const cv::Mat
 
 void DetectAndComputeOrbSplit(const cv::Mat& gray, const OrbSplitParams& params,
                               std::vector<cv::KeyPoint>* keypoints, cv::Mat* descriptors) {
-  IMUMATCH_CHECK(!gray.empty() && gray.type() == CV_8UC1,
-                 "DetectAndComputeOrbSplit needs a non-empty 8-bit gray image");
-  IMUMATCH_CHECK(params.max_keypoints >= 1 && params.n_levels >= 1 && params.scale_factor > 1.0f,
-                 "bad ORB parameters");
   std::vector<cv::KeyPoint> kp[2];
   cv::Mat desc[2];
-  std::exception_ptr errors[2];
-  cv::parallel_for_(cv::Range(0, 2), [&](const cv::Range& range) {
-    for (int part = range.start; part < range.end; ++part) {
-      try {
-        DetectAndComputeOrbPart(gray, params, part, &kp[part], &desc[part]);
-      } catch (...) {
-        errors[part] = std::current_exception();
-      }
-    }
-  });
-  for (const std::exception_ptr& e : errors) {
-    if (e) std::rethrow_exception(e);
-  }
+  RunTasks(2,
+           [&](int part) { DetectAndComputeOrbPart(gray, params, part, &kp[part], &desc[part]); });
   MergeOrbSplitParts(kp, desc, keypoints, descriptors);
 }
 
