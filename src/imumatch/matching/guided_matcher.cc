@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "imumatch/core/error.h"
+#include "imumatch/matching/scene_depth.h"
 
 namespace imumatch {
 
@@ -458,12 +459,14 @@ MatchResult GuidedMatcherWorkspace::Match(const PinholeCamera& camera, const Cam
   } else {
     ToIdealKeypointInfos(keypoints_a, undistorter, &info_a_);
   }
-  PredictKeypoints(predictor, info_a_, depths_, &predictions_);
   ToIdealKeypointInfos(keypoints_b, undistorter, &info_b_);
   last_b_.resize(keypoints_b.size());
   for (size_t j = 0; j < keypoints_b.size(); ++j) last_b_[j] = keypoints_b[j].pt;
   grid_.Build(info_b_, camera.width, camera.height,
               static_cast<float>(matcher_options.grid_cell_size));
+  scene_near_ = PredictKeypointsInScene(
+      predictor, info_a_, depths_, DescriptorView::FromMat(descriptors_a), info_b_, grid_,
+      DescriptorView::FromMat(descriptors_b), matcher_options, &predictions_, &scratch_);
   return MatchGuided(predictions_, info_a_, DescriptorView::FromMat(descriptors_a), info_b_, grid_,
                      DescriptorView::FromMat(descriptors_b), matcher_options, &scratch_);
 }

@@ -127,6 +127,8 @@ class GuidedMatcherWorkspace {
                     const GuidedMatcherOptions& matcher_options);
 
   const std::vector<KeypointPrediction>& predictions() const { return predictions_; }
+  // Where the last call's epipolar segments started (PredictKeypointsInScene).
+  const SceneNearDepth& scene_near() const { return scene_near_; }
   // The keypoints of the last call in ideal pixels.
   const std::vector<KeypointInfo>& ideal_keypoints_a() const { return info_a_; }
   const std::vector<KeypointInfo>& ideal_keypoints_b() const { return info_b_; }
@@ -141,6 +143,7 @@ class GuidedMatcherWorkspace {
   std::vector<KeypointPrediction> predictions_;
   GridIndex grid_;
   GuidedSearchScratch scratch_;
+  SceneNearDepth scene_near_;
 };
 
 }  // namespace imumatch

@@ -46,7 +46,17 @@ bool ClipSegment(Eigen::Vector2d& p0, Eigen::Vector2d& p1, double x0, double y0,
 }
 }  // namespace
 
+void SceneNearDepthOptions::Check() const {
+  IMUMATCH_CHECK(pilot_queries >= 1, "scene_near.pilot_queries=" << pilot_queries);
+  IMUMATCH_CHECK(pilot_ratio > 0.0 && pilot_ratio <= 1.0, "scene_near.pilot_ratio=" << pilot_ratio);
+  IMUMATCH_CHECK(min_samples >= 1, "scene_near.min_samples=" << min_samples);
+  IMUMATCH_CHECK(near_quantile >= 0.0 && near_quantile < 1.0,
+                 "scene_near.near_quantile=" << near_quantile);
+  IMUMATCH_CHECK(near_margin > 0.0 && near_margin <= 1.0, "scene_near.near_margin=" << near_margin);
+}
+
 void PredictionOptions::Check() const {
+  scene_near.Check();
   IMUMATCH_CHECK(std::isfinite(min_depth) && min_depth > 0.0, "min_depth=" << min_depth);
   IMUMATCH_CHECK(max_depth > min_depth, "max_depth=" << max_depth << " <= min_depth");
   IMUMATCH_CHECK(std::isfinite(segment_min_depth) && segment_min_depth > 0.0,
@@ -238,6 +248,27 @@ void KeypointPredictor::SetOrientation(const Eigen::Vector3d& q, KeypointPredict
   p.angle_change_deg = static_cast<float>(std::atan2(a0.y() - a1.x(), a0.x() + a1.y()) * kRadToDeg);
   p.local_affine << static_cast<float>(a0.x()), static_cast<float>(a1.x()),
       static_cast<float>(a0.y()), static_cast<float>(a1.y());
+}
+
+KeypointPredictor KeypointPredictor::WithSegmentMinDepth(double min_depth) const {
+  IMUMATCH_CHECK(
+      std::isfinite(min_depth) && min_depth > 0.0 && min_depth < options_.segment_max_depth,
+      "segment min depth " << min_depth << " outside (0, " << options_.segment_max_depth << ")");
+  KeypointPredictor copy = *this;
+  copy.options_.segment_min_depth = min_depth;
+  return copy;
+}
+
+double KeypointPredictor::InverseDepthOf(const Eigen::Vector2d& uv_a,
+                                         const Eigen::Vector2d& uv_b) const {
+  const Eigen::Vector2d xy_a = camera_.IdealToNormalized(uv_a);
+  const Eigen::Vector2d xy_b = camera_.IdealToNormalized(uv_b);
+  const Eigen::Vector3d xb(xy_b.x(), xy_b.y(), 1.0);
+  const Eigen::Vector3d a = (r_ * Eigen::Vector3d(xy_a.x(), xy_a.y(), 1.0)).cross(xb);
+  const Eigen::Vector3d b = t_.cross(xb);
+  const double bb = b.squaredNorm();
+  if (!(bb > 0.0) || !std::isfinite(bb)) return std::numeric_limits<double>::quiet_NaN();
+  return -a.dot(b) / bb;
 }
 
 KeypointPrediction KeypointPredictor::Predict(const Eigen::Vector2d& uv_a, double depth_m,

@@ -54,6 +54,31 @@ TEST(PredictorTest, WithDepthEqualsDirectReprojection) {
   EXPECT_NEAR(p.scale_min, p_a.norm() / p_b.norm(), 1e-5);
 }
 
+TEST(PredictorTest, InverseDepthOfRecoversTheDepthAlongTheEpipolarLine) {
+  const PinholeCamera cam = TestCamera();
+  const CameraMotion motion = MakeMotion(FromEulerZYX(0.02, -0.03, 0.05), {0.1, -0.05, 0.08});
+  const KeypointPredictor predictor(cam, motion, PredictionOptions());
+  for (const double z : {0.3, 1.0, 2.0, 7.5, 40.0}) {
+    // The point's projection in B by hand, as in the test above.
+    const Eigen::Vector3d p_a((150.0 - 320.0) / 500.0 * z, (400.0 - 240.0) / 480.0 * z, z);
+    const Eigen::Vector3d p_b = motion.cam_b_from_cam_a * p_a;
+    const Eigen::Vector2d uv_b(500.0 * p_b.x() / p_b.z() + 320.0,
+                               480.0 * p_b.y() / p_b.z() + 240.0);
+    EXPECT_NEAR(predictor.InverseDepthOf({150.0, 400.0}, uv_b), 1.0 / z, 1e-9) << z;
+  }
+  // The point at infinity (the rotation-only prediction) has rho 0; a position beyond it along
+  // the line, a negative rho.
+  const Eigen::Vector2d inf_b = predictor.RotationOnly({150.0, 400.0});
+  EXPECT_NEAR(predictor.InverseDepthOf({150.0, 400.0}, inf_b), 0.0, 1e-9);
+  const Eigen::Vector2d near_b = predictor.Predict({150.0, 400.0}, 1.0).uv.cast<double>();
+  EXPECT_LT(predictor.InverseDepthOf({150.0, 400.0}, inf_b + (inf_b - near_b)), 0.0);
+  // Without translation the depth is not observable.
+  const KeypointPredictor pure_rotation(
+      cam, MakeMotion(FromEulerZYX(0.02, -0.03, 0.05), Eigen::Vector3d::Zero()),
+      PredictionOptions());
+  EXPECT_TRUE(std::isnan(pure_rotation.InverseDepthOf({150.0, 400.0}, {160.0, 390.0})));
+}
+
 TEST(PredictorTest, BehindCameraAndOutsideImageAreReported) {
   const PinholeCamera cam = TestCamera();
   // B is 3 m in front of A looking the same way: a point at 2 m ends up behind B.
