@@ -56,6 +56,7 @@ struct CommonArgs {
   double gate = 0.99;
   double fixed_half = 10.0;
   double z_min = -1.0, z_max = -1.0;  // < 0: PredictionOptions defaults
+  bool fixed_segments = false;
   bool no_refine = false;
   double guided_ratio = -1.0;           // < 0: --ratio
   double orientation_tolerance = -1.0;  // < 0: GuidedMatcherOptions default
@@ -103,7 +104,12 @@ void AddCommonOptions(CLI::App* cmd, CommonArgs& a) {
       ->capture_default_str();
   cmd->add_option("--fixed-window", a.fixed_half, "fixed10 method: half size of the square (px)")
       ->capture_default_str();
-  cmd->add_option("--z-min", a.z_min, "no-depth prediction: nearest depth of the segment (m)");
+  cmd->add_option("--z-min", a.z_min,
+                  "no-depth prediction: nearest depth of the segment (m; the scene may move it "
+                  "further, see --fixed-segments)");
+  cmd->add_flag("--fixed-segments", a.fixed_segments,
+                "no-depth prediction: segments from --z-min, not from the nearest depth a pilot "
+                "of matches shows");
   cmd->add_option("--z-max", a.z_max, "no-depth prediction: farthest depth of the segment (m)");
   cmd->add_option("--guided-ratio", a.guided_ratio,
                   "guided: Lowe's ratio inside the search region (default: --ratio)");
@@ -160,6 +166,7 @@ EvaluationOptions MakeOptions(const CommonArgs& a) {
   o.prediction.fixed_half_size = a.fixed_half;
   if (a.z_min >= 0.0) o.prediction.segment_min_depth = a.z_min;
   if (a.z_max >= 0.0) o.prediction.segment_max_depth = a.z_max;
+  o.prediction.scene_near.enabled = !a.fixed_segments;
   o.refine_subpixel = !a.no_refine;
   if (a.orientation_tolerance >= 0.0) o.guided.orientation_tolerance_deg = a.orientation_tolerance;
   if (a.sigma_scaling == "none") {

@@ -32,6 +32,7 @@ struct Predictions {
 struct PyMatchResult {
   MatchResult result;
   Predictions predictions;
+  SceneNearDepth scene_near;
   bool guided = false;
   SubpixelStats refine_stats;
 };
@@ -187,6 +188,23 @@ FeatureOptions) overrides detector and max_keypoints.)");
       .value("NEAREST", DepthSampling::kNearest)
       .value("MIN3X3", DepthSampling::kMin3x3)
       .value("MEDIAN3X3", DepthSampling::kMedian3x3);
+  py::class_<SceneNearDepthOptions>(m, "SceneNearDepthOptions",
+                                    R"(The near end of the epipolar segments of keypoints without
+depth, from the scene: a pilot of keypoints is matched along the full segments and the segments
+then start at near_margin x the near_quantile of the depths its matches need.)")
+      .def(py::init<>(), "The defaults.")
+      .def_readwrite("enabled", &SceneNearDepthOptions::enabled,
+                     "False: the segments start at segment_min_depth.")
+      .def_readwrite("pilot_queries", &SceneNearDepthOptions::pilot_queries,
+                     "Keypoints of A in the pilot (at most).")
+      .def_readwrite("pilot_ratio", &SceneNearDepthOptions::pilot_ratio,
+                     "Lowe's ratio of the pilot's matching (at most the matcher's).")
+      .def_readwrite("min_samples", &SceneNearDepthOptions::min_samples,
+                     "Fewer pilot matches: the configured near end is kept.")
+      .def_readwrite("near_quantile", &SceneNearDepthOptions::near_quantile,
+                     "Quantile of the pilot's depths from the near side (0: the nearest).")
+      .def_readwrite("near_margin", &SceneNearDepthOptions::near_margin,
+                     "The segments start at this fraction of that depth.");
   py::class_<PredictionOptions>(m, "PredictionOptions", "How keypoints are predicted into frame B.")
       .def(py::init<>(), "The defaults.")
       .def_readwrite("min_depth", &PredictionOptions::min_depth, "m; nearer depth is invalid")
@@ -215,6 +233,9 @@ FeatureOptions) overrides detector and max_keypoints.)");
                      "Half size of the fixed window (px; the paper: 10).")
       .def_readwrite("depth_sampling", &PredictionOptions::depth_sampling,
                      "How depth is read at a keypoint (DepthSampling).")
+      .def_readwrite("scene_near", &PredictionOptions::scene_near,
+                     "SceneNearDepthOptions: the segments' near end from the scene (match_guided; "
+                     "predict_keypoints, which sees no frame B, uses segment_min_depth).")
       .def("check", &PredictionOptions::Check,
            "Raises InvalidArgument (a ValueError) when a value is out of range.");
 
@@ -414,6 +435,13 @@ metre) or as metres per keypoint (<= 0 or NaN: none). Without depth: the epipola
           },
           "Guided: the Predictions of A's keypoints (None for the baselines).")
       .def_property_readonly(
+          "segment_near_m",
+          [](const PyMatchResult& r) -> py::object {
+            if (!r.guided) return py::none();
+            return py::float_(r.scene_near.segment_min_depth_m);
+          },
+          "Guided: where the epipolar segments of keypoints without depth started (m).")
+      .def_property_readonly(
           "refine_stats",
           [](const PyMatchResult& r) {
             py::dict d;
@@ -488,6 +516,7 @@ metre) or as metres per keypoint (<= 0 or NaN: none). Without depth: the epipola
           out.result = workspace.Match(camera, motion, kps_a, da, depth.mat, kps_b, db,
                                        prediction_options, matcher_options);
           out.predictions.items = workspace.predictions();
+          out.scene_near = workspace.scene_near();
           if (!ia.mat.empty()) {
             if (ia.mat.type() != CV_8UC1 || ib.mat.type() != CV_8UC1) {
               throw InvalidArgument("image_a, image_b: expected uint8 gray images");

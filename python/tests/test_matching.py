@@ -151,3 +151,31 @@ def test_feature_kinds_and_zero_copy_descriptors():
     _, d1 = imumatch.extract_features(gray, "orb", 500)
     own = imumatch.match_brute_force(d1, d1, ratio=1.0)
     assert (own.query_idx == own.train_idx).all() and (own.distance == 0).all()
+
+
+def test_segments_near_end_from_the_scene_without_depth():
+    seq, motion, gray_a, gray_b = synthetic_pair()
+    kps_a, desc_a = imumatch.extract_features(gray_a, "orb", 1000)
+    kps_b, desc_b = imumatch.extract_features(gray_b, "orb", 1000)
+    fixed = imumatch.PredictionOptions()
+    fixed.scene_near.enabled = False
+    adapted = imumatch.match_guided(seq.camera, motion, kps_a, desc_a, kps_b, desc_b)
+    plain = imumatch.match_guided(seq.camera, motion, kps_a, desc_a, kps_b, desc_b,
+                                  prediction_options=fixed)
+    assert plain.segment_near_m == pytest.approx(0.1)
+    # The synthetic room lies metres away: the segments start far beyond 0.1 m ...
+    assert adapted.segment_near_m > 0.1
+    assert adapted.stats["points_scanned"] < plain.stats["points_scanned"]
+    # ... and the matches still agree with the exact poses and the rendered depth.
+    fa, fb = seq.frames
+    gt = imumatch.camera_motion_from_poses(fa.t_ns, fa.world_from_cam, fb.t_ns, fb.world_from_cam)
+    correct = []
+    for result in (adapted, plain):
+        uv_a = kps_a[result.query_idx, :2]
+        z = fa.depth[np.round(uv_a[:, 1]).astype(int), np.round(uv_a[:, 0]).astype(int)] / 5000.0
+        ok = z > 0
+        p_b = gt.cam_b_from_cam_a.transform(seq.camera.unproject(uv_a[ok], z[ok]))
+        err = np.linalg.norm(seq.camera.project(p_b) - kps_b[result.train_idx[ok], :2], axis=1)
+        correct.append(int(np.sum(err < 3.0)))
+    assert correct[0] >= 0.98 * correct[1]
+    assert correct[0] > 200

@@ -21,6 +21,7 @@
 #include "imumatch/matching/baseline_matchers.h"
 #include "imumatch/matching/descriptor_distance.h"
 #include "imumatch/matching/klt_tracker.h"
+#include "imumatch/matching/scene_depth.h"
 
 #include "imumatch/eval/pair_motion.h"
 #include "imumatch/eval/pipelined.h"
@@ -118,7 +119,11 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
     return run;
   }
   PredictionOptions popts = options.prediction;
-  if (method == MatchMethod::kFixedWindow) popts.window_mode = WindowMode::kFixed;
+  if (method == MatchMethod::kFixedWindow) {
+    // The paper's window: a fixed square, and fixed segments (the scene's near end is ours).
+    popts.window_mode = WindowMode::kFixed;
+    popts.scene_near.enabled = false;
+  }
   // Mapping a frame's keypoints to ideal pixels is done once per frame; a stream pays it once per
   // pair (frame B's), so that is what the prediction stage is charged.
   auto t0 = Clock::now();
@@ -127,7 +132,15 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
   if (!depth_a.empty()) {
     depths = SampleDepths(depth_a, camera.depth_scale, fa.keypoints, popts.depth_sampling);
   }
-  predictions = PredictKeypoints(undistorter, motion, ca.ideal, depths, popts);
+  const KeypointPredictor predictor(undistorter, motion, popts);
+  // The grid over B serves the scene's near depth (its pilot matching) and the search.
+  GridIndex grid_b;
+  grid_b.Build(cb.ideal, camera.width, camera.height,
+               static_cast<float>(options.guided.grid_cell_size));
+  GuidedSearchScratch scratch;
+  run.scene_near = PredictKeypointsInScene(
+      predictor, ca.ideal, depths, DescriptorView::FromMat(fa.descriptors), cb.ideal, grid_b,
+      DescriptorView::FromMat(fb.descriptors), options.guided, &predictions, &scratch);
   run.predict_ms = MsSince(t0) + cb.ideal_ms;
   if (IsTracking(method)) {
     // Frame A's pyramid would be frame B's of the previous pair in a stream: not charged.
@@ -143,10 +156,10 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
     if (method == MatchMethod::kKlt) return run;
     // Hybrid: guided matching for the keypoints whose track failed, inside the same windows.
     t0 = Clock::now();
-    MatchResult result = MatchGuided(PredictionsOfFailedTracks(predictions, tracks), ca.ideal,
-                                     DescriptorView::FromMat(fa.descriptors), cb.ideal,
-                                     DescriptorView::FromMat(fb.descriptors), camera.width,
-                                     camera.height, options.guided);
+    MatchResult result =
+        MatchGuided(PredictionsOfFailedTracks(predictions, tracks), ca.ideal,
+                    DescriptorView::FromMat(fa.descriptors), cb.ideal, grid_b,
+                    DescriptorView::FromMat(fb.descriptors), options.guided, &scratch);
     if (options.refine_subpixel) {
       run.refine_stats = RefineMatches(image_a.image, image_b.image, fa.keypoints, fb.keypoints,
                                        predictions, camera, options.subpixel, result.matches);
@@ -158,9 +171,9 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
     return run;
   }
   t0 = Clock::now();
-  MatchResult result = MatchGuided(predictions, ca.ideal, DescriptorView::FromMat(fa.descriptors),
-                                   cb.ideal, DescriptorView::FromMat(fb.descriptors), camera.width,
-                                   camera.height, options.guided);
+  MatchResult result =
+      MatchGuided(predictions, ca.ideal, DescriptorView::FromMat(fa.descriptors), cb.ideal, grid_b,
+                  DescriptorView::FromMat(fb.descriptors), options.guided, &scratch);
   run.match_ms = MsSince(t0);
   run.stats = result.stats;
   run.outcomes = std::move(result.outcomes);

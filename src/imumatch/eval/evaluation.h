@@ -15,6 +15,7 @@
 #include "imumatch/matching/descriptor_distance.h"
 #include "imumatch/matching/match_types.h"
 #include "imumatch/matching/predictor.h"
+#include "imumatch/matching/scene_depth.h"
 #include "imumatch/matching/subpixel_refinement.h"
 
 // The per-pair evaluation pipeline: frames read on a reader thread, features extracted once per
@@ -38,6 +39,7 @@ struct MethodRun {
   int from_descriptors = 0;
   std::vector<MatchResidual> residuals;  // one per match
   MatchStats stats;                      // guided methods: outcome of every query
+  SceneNearDepth scene_near;             // guided methods: the segments' near end
   std::vector<QueryOutcome> outcomes;    // guided methods: per query
   // Guided methods, when the record has a brute-force run: for each of its matches, whether this
   // method's search region for the query contained the brute-force partner, and how the query

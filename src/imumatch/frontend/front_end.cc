@@ -12,6 +12,7 @@
 #include "imumatch/imu/imu_integrator.h"
 #include "imumatch/matching/baseline_matchers.h"
 #include "imumatch/matching/descriptor_distance.h"
+#include "imumatch/matching/scene_depth.h"
 
 namespace imumatch {
 
@@ -155,7 +156,14 @@ std::vector<Match> FrontEnd::MatchPass(const CameraMotion& motion, const Feature
     depths = SampleDepths(prev.depth, camera.depth_scale, prev.features.keypoints,
                           options_.prediction.depth_sampling);
   }
-  predictions = PredictKeypoints(undistorter_, motion, prev.ideal, depths, options_.prediction);
+  GridIndex grid;
+  grid.Build(ideal, camera.width, camera.height,
+             static_cast<float>(options_.guided.grid_cell_size));
+  GuidedSearchScratch scratch;
+  PredictKeypointsInScene(KeypointPredictor(undistorter_, motion, options_.prediction), prev.ideal,
+                          depths, DescriptorView::FromMat(prev.features.descriptors), ideal, grid,
+                          DescriptorView::FromMat(features.descriptors), options_.guided,
+                          &predictions, &scratch);
   std::vector<Match> out;
   std::vector<KeypointPrediction> rest;
   const std::vector<KeypointPrediction>* guided_predictions = &predictions;
@@ -172,7 +180,7 @@ std::vector<Match> FrontEnd::MatchPass(const CameraMotion& motion, const Feature
   }
   MatchResult r = MatchGuided(
       *guided_predictions, prev.ideal, DescriptorView::FromMat(prev.features.descriptors), ideal,
-      DescriptorView::FromMat(features.descriptors), camera.width, camera.height, options_.guided);
+      grid, DescriptorView::FromMat(features.descriptors), options_.guided, &scratch);
   if (options_.refine_subpixel) {
     RefineMatches(prev.image, image, prev.features.keypoints, features.keypoints, predictions,
                   camera, options_.subpixel, r.matches);

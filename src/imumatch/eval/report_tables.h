@@ -1,0 +1,40 @@
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "imumatch/eval/evaluation.h"
+#include "imumatch/eval/summary.h"
+
+namespace imumatch {
+
+// Markdown tables (GitHub style). Rows: detector x method; columns: cases.
+// Table I: mean time per pair, "match ms / total ms" (total = extraction of both frames + IMU
+// motion + prediction + matching).
+std::string MarkdownTimeTable(const std::vector<MethodSummary>& summaries);
+// Table II: mean matches and false matches per pair, "matches / false".
+std::string MarkdownMatchTable(const std::vector<MethodSummary>& summaries);
+// Per (case, detector, method): pairs, keypoints, stage times (mean, match p50/p90/p99), matches,
+// correct, false, precision, recall.
+std::string MarkdownDetailTable(const std::vector<MethodSummary>& summaries);
+// IMU-guided against brute force per case and detector: match time ratio, correct, precision.
+std::string MarkdownSpeedupTable(const std::vector<MethodSummary>& summaries);
+// Window recall of the guided methods per case and detector (pooled, worst pair, misses by how
+// the query was predicted), and the motion's error against the ground truth per case.
+std::string MarkdownWindowTable(const std::vector<DetectorPairRecord>& records,
+                                double threshold_px);
+std::string MarkdownMotionErrorTable(const std::vector<DetectorPairRecord>& records);
+// Where the epipolar segments of keypoints without depth started (PredictKeypointsInScene) per
+// case, detector and method: near end min / median / max, pairs whose near end moved, pilot
+// matches; "" when no record predicted a keypoint without depth.
+std::string MarkdownSceneNearTable(const std::vector<DetectorPairRecord>& records);
+// How the tracks of the tracking methods (klt0, klt, hybrid) ended, mean per pair; "" when no
+// record has a tracking run.
+std::string MarkdownTrackingTable(const std::vector<DetectorPairRecord>& records);
+// Precision (pooled over every case) of each detector x method at several thresholds.
+std::string MarkdownThresholdTable(const std::vector<DetectorPairRecord>& records,
+                                   const std::vector<double>& thresholds_px);
+// v with a fixed number of digits after the point.
+std::string FormatFixed(double v, int digits);
+
+}  // namespace imumatch
