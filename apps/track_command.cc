@@ -27,6 +27,7 @@ struct TrackArgs {
   int max_keypoints = 1000;
   bool hybrid = false;
   bool no_second_pass = false;
+  bool fixed_segments = false;
   double still_s = 0.5;
   size_t first = 0;
   size_t max_frames = 0;
@@ -44,6 +45,7 @@ void RunTrackCommand(const TrackArgs& a) {
   o.front_end.features.max_keypoints = a.max_keypoints;
   o.front_end.hybrid = a.hybrid;
   o.front_end.second_pass = !a.no_second_pass;
+  o.front_end.prediction.scene_near.enabled = !a.fixed_segments;
   o.front_end.still_s = a.still_s;
   o.first_frame = a.first;
   o.max_frames = a.max_frames;
@@ -82,7 +84,8 @@ void RunTrackCommand(const TrackArgs& a) {
       {{"dataset", a.path},
        {"detector", a.detector + ", " + std::to_string(a.max_keypoints) + " keypoints"},
        {"matcher", std::string(a.hybrid ? "hybrid (IMU-seeded KLT + guided)" : "guided") +
-                       (a.no_second_pass ? ", one pass" : ", two passes")},
+                       (a.no_second_pass ? ", one pass" : ", two passes") +
+                       (a.fixed_segments ? ", fixed segments" : "")},
        {"ground truth",
         result.has_truth ? "judged afterwards, never given to the front end" : "none"}});
   std::cout << report << std::flush;
@@ -113,6 +116,9 @@ void AddTrackCommand(CLI::App& app) {
   cmd->add_flag("--hybrid", a->hybrid,
                 "track with the IMU-seeded KLT first, guided matching for the failed tracks");
   cmd->add_flag("--one-pass", a->no_second_pass, "no second matching pass with the fitted pose");
+  cmd->add_flag("--fixed-segments", a->fixed_segments,
+                "keypoints without depth: epipolar segments from 0.1 m, not from the nearest "
+                "depth a pilot of matches shows");
   cmd->add_option("--still", a->still_s,
                   "seconds of still IMU at the start (gravity and gyro bias)")
       ->capture_default_str()
