@@ -71,9 +71,9 @@ SceneNearDepth PredictKeypointsInScene(
   // even the configured capsule (a keypoint with depth matched off its epipolar line) tells
   // nothing.
   std::vector<double> sample_depths;
+  const auto level_depth = [&](int level) { return po.segment_min_depth * std::ldexp(1.0, level); };
   auto contains = [&](int level, const KeypointInfo& a, double sigma_scale, const KeypointInfo& b) {
-    const KeypointPredictor p =
-        predictor.WithSegmentMinDepth(po.segment_min_depth * std::ldexp(1.0, level));
+    const KeypointPredictor p = predictor.WithSegmentMinDepth(level_depth(level));
     const KeypointPrediction pr = p.Predict(Eigen::Vector2d(a.x, a.y), nan, sigma_scale);
     return pr.status == PredictionStatus::kWithoutDepth && pr.Contains(b.x, b.y);
   };
@@ -84,15 +84,29 @@ SceneNearDepth PredictKeypointsInScene(
     const bool without_depth =
         (*predictions)[static_cast<size_t>(m.query_idx)].status == PredictionStatus::kWithoutDepth;
     if (!without_depth && !contains(0, a, sigma_scale, b)) continue;
-    int lo = 0, hi = levels + 1;  // contained at lo, not at hi (levels + 1: beyond the ladder)
+    const double rho = predictor.InverseDepthOf({a.x, a.y}, {b.x, b.y});
+    const double along_line = rho > 0.0 ? 1.0 / rho : std::numeric_limits<double>::infinity();
+    // The sample is min(ladder depth, along_line): only the ladder's levels up to the first one
+    // deeper than along_line matter. When that level's capsule holds the partner, so do all
+    // shallower ones and the sample is along_line (one prediction instead of a search).
+    int deeper = levels + 1;  // the first level deeper than along_line (levels + 1: none)
+    if (std::isfinite(along_line)) {
+      deeper =
+          std::clamp(static_cast<int>(std::floor(std::log2(along_line / po.segment_min_depth))) + 1,
+                     0, levels + 1);
+      while (deeper > 0 && level_depth(deeper - 1) > along_line) --deeper;
+      while (deeper <= levels && level_depth(deeper) <= along_line) ++deeper;
+    }
+    if (deeper <= levels && contains(deeper, a, sigma_scale, b)) {
+      sample_depths.push_back(along_line);
+      continue;
+    }
+    int lo = 0, hi = deeper;  // contained at lo (level 0, checked above), not at hi
     while (hi - lo > 1) {
       const int mid = (lo + hi) / 2;
       (contains(mid, a, sigma_scale, b) ? lo : hi) = mid;
     }
-    double depth = po.segment_min_depth * std::ldexp(1.0, lo);
-    const double rho = predictor.InverseDepthOf({a.x, a.y}, {b.x, b.y});
-    if (rho > 0.0) depth = std::min(depth, 1.0 / rho);
-    sample_depths.push_back(depth);
+    sample_depths.push_back(std::min(level_depth(lo), along_line));
   }
   out.pilot_matches = static_cast<int>(sample_depths.size());
   if (out.pilot_matches >= so.min_samples) {
