@@ -28,6 +28,14 @@ void GuidedMatcherOptions::Check() const {
 
 namespace {
 
+// +inf when flag is 1, 0 when it is 0, without a branch (for min-accumulators over costs >= 0).
+inline float InfIf(int flag) {
+  const uint32_t bits = static_cast<uint32_t>(-flag) & 0x7f800000u;
+  float f;
+  std::memcpy(&f, &bits, sizeof f);
+  return f;
+}
+
 float SquaredNorm(const uint8_t* row, int bytes) {
   const float* v = reinterpret_cast<const float*>(row);
   float s = 0.0f;
@@ -338,13 +346,16 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
         dup2 = dup_radius * dup_radius * scale * scale;
       }
       const float bx = cand_b[best_k].x, by = cand_b[best_k].y;
+      // Without a branch per candidate (their outcomes are data, and mispredicted branches here
+      // cost more than the arithmetic once windows hold a dozen candidates): a skipped candidate's
+      // cost becomes +inf, and each accumulator sees +inf for the candidates of the other kind.
       for (int j = 0; j < kept; ++j) {
         const float dx = cand_b[kept_slot[j]].x - bx, dy = cand_b[kept_slot[j]].y - by;
-        const bool skip = (j == best_j) | (dx * dx + dy * dy <= dup2);
-        const float c = skip ? inf : kept_cost[j];
-        const bool consistent = kept_consistent[j];
-        second = consistent ? std::min(second, c) : second;
-        rival = consistent ? rival : std::min(rival, c);
+        const int skip = (j == best_j) | static_cast<int>(dx * dx + dy * dy <= dup2);
+        const int consistent = kept_consistent[j];
+        const float c = kept_cost[j] + InfIf(skip);
+        second = std::min(second, c + InfIf(consistent ^ 1));
+        rival = std::min(rival, c + InfIf(consistent));
       }
     }
     stats.distances_computed += evaluated;
