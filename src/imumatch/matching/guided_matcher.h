@@ -103,8 +103,8 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
 
 // The whole pipeline for one frame pair: depth lookup in A (depth_a may be empty: no depth),
 // keypoints mapped to ideal pixels, grid over B, prediction (with the segments' near end from the
-// scene when prediction_options.scene_near.enabled: PredictKeypointsInScene), matching. Keypoints as OpenCV gives
-// them (image pixels).
+// scene when prediction_options.scene_near.enabled: PredictKeypointsInScene), matching. Keypoints
+// as OpenCV gives them (image pixels).
 MatchResult MatchFramesGuided(const PinholeCamera& camera, const CameraMotion& motion,
                               const std::vector<cv::KeyPoint>& keypoints_a,
                               const cv::Mat& descriptors_a, const cv::Mat& depth_a,
