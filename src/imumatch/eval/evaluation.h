@@ -15,7 +15,6 @@
 #include "imumatch/matching/descriptor_distance.h"
 #include "imumatch/matching/match_types.h"
 #include "imumatch/matching/predictor.h"
-#include "imumatch/matching/scene_depth.h"
 #include "imumatch/matching/subpixel_refinement.h"
 
 // The per-pair evaluation pipeline: frames read on a reader thread, features extracted once per

@@ -5,7 +5,6 @@
 #include <fstream>
 #include <iomanip>
 #include <map>
-#include <numeric>
 #include <sstream>
 #include <tuple>
 

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <iomanip>
 #include <map>
-#include <numeric>
 #include <sstream>
 #include <tuple>
 
@@ -168,39 +167,39 @@ std::string MarkdownWindowTable(const std::vector<DetectorPairRecord>& records,
 // Where the epipolar segments of keypoints without depth started (PredictKeypointsInScene), per
 // case, detector and method; empty when no pair had keypoints without depth.
 std::string MarkdownSceneNearTable(const std::vector<DetectorPairRecord>& records) {
-  std::map<std::tuple<std::string, int, int>, std::vector<double>> near, pilot, moved;
+  struct Acc {
+    std::vector<double> near;  // segment_min_depth_m per pair
+    double pilot_matches = 0.0;
+    int moved = 0;
+  };
+  std::map<std::tuple<std::string, int, int>, Acc> acc;
   std::vector<std::string> order;
   for (const auto& r : records) {
     for (const auto& run : r.runs) {
       if (run.stats.predicted_without_depth == 0) continue;
       if (std::find(order.begin(), order.end(), r.case_name) == order.end())
         order.push_back(r.case_name);
-      const auto key =
-          std::make_tuple(r.case_name, static_cast<int>(r.detector), static_cast<int>(run.method));
-      near[key].push_back(run.scene_near.segment_min_depth_m);
-      pilot[key].push_back(run.scene_near.pilot_matches);
-      moved[key].push_back(run.scene_near.moved ? 1.0 : 0.0);
+      Acc& a = acc[{r.case_name, static_cast<int>(r.detector), static_cast<int>(run.method)}];
+      a.near.push_back(run.scene_near.segment_min_depth_m);
+      a.pilot_matches += run.scene_near.pilot_matches;
+      a.moved += run.scene_near.moved ? 1 : 0;
     }
   }
-  if (near.empty()) return "";
+  if (acc.empty()) return "";
   std::ostringstream out;
   out << "| Case | Detector | Method | pairs | near end m: min / median / max | pairs moved | "
          "pilot matches (mean) |\n|---|---|---|---:|---:|---:|---:|\n";
   for (const auto& c : order) {
-    for (const auto& [key, v] : near) {
+    for (const auto& [key, a] : acc) {
       if (std::get<0>(key) != c) continue;
-      const StageStats st = ComputeStageStats(v);
-      const std::vector<double>& p = pilot.at(key);
-      const std::vector<double>& m = moved.at(key);
+      const StageStats st = ComputeStageStats(a.near);
+      const double pairs = static_cast<double>(a.near.size());
       out << "| " << c << " | " << ToString(static_cast<DetectorKind>(std::get<1>(key))) << " | "
-          << DisplayName(static_cast<MatchMethod>(std::get<2>(key))) << " | " << v.size() << " | "
-          << FormatFixed(*std::min_element(v.begin(), v.end()), 2) << " / "
+          << DisplayName(static_cast<MatchMethod>(std::get<2>(key))) << " | " << a.near.size()
+          << " | " << FormatFixed(*std::min_element(a.near.begin(), a.near.end()), 2) << " / "
           << FormatFixed(st.p50, 2) << " / "
-          << FormatFixed(*std::max_element(v.begin(), v.end()), 2) << " | "
-          << std::accumulate(m.begin(), m.end(), 0.0) << " | "
-          << FormatFixed(std::accumulate(p.begin(), p.end(), 0.0) / static_cast<double>(p.size()),
-                         1)
-          << " |\n";
+          << FormatFixed(*std::max_element(a.near.begin(), a.near.end()), 2) << " | " << a.moved
+          << " | " << FormatFixed(a.pilot_matches / pairs, 1) << " |\n";
     }
   }
   return out.str();

@@ -283,8 +283,7 @@ KeypointPrediction KeypointPredictor::Predict(const Eigen::Vector2d& uv_a, doubl
   const Eigen::Matrix2d pixel_cov_a = PixelNoise(uv_a, pixel_var);
   const double range_a = xa.norm();  // |p_a| / z
 
-  const bool has_depth =
-      std::isfinite(depth_m) && depth_m >= options_.min_depth && depth_m <= options_.max_depth;
+  const bool has_depth = options_.IsUsableDepth(depth_m);
   if (has_depth) {
     const double rho = 1.0 / depth_m;
     const Eigen::Vector3d q = rx + rho * t_;

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -121,6 +122,10 @@ struct PredictionOptions {
   SceneNearDepthOptions scene_near;
 
   void Check() const;
+  // A measured depth the prediction uses: finite and within [min_depth, max_depth].
+  bool IsUsableDepth(double depth_m) const {
+    return std::isfinite(depth_m) && depth_m >= min_depth && depth_m <= max_depth;
+  }
   // -2 ln(1 - gate_probability): the chi-square quantile for 2 degrees of freedom.
   double GateChiSquare() const;
 };

@@ -28,10 +28,7 @@ SceneNearDepth PredictKeypointsInScene(
   out.segment_min_depth_m = po.segment_min_depth;
   const float nan = std::numeric_limits<float>::quiet_NaN();
   auto depth_of = [&](size_t i) { return depths_m.empty() ? nan : depths_m[i]; };
-  auto has_depth = [&](size_t i) {
-    const float d = depth_of(i);
-    return std::isfinite(d) && d >= po.min_depth && d <= po.max_depth;
-  };
+  auto has_depth = [&](size_t i) { return po.IsUsableDepth(depth_of(i)); };
   // The ladder of near ends: segment_min_depth x 2^k up to max_depth (the measurable range) and
   // short of the segments' far end.
   const double top = std::min(po.max_depth, 0.5 * po.segment_max_depth);
@@ -75,9 +72,14 @@ SceneNearDepth PredictKeypointsInScene(
   // nothing.
   std::vector<double> sample_depths;
   const auto level_depth = [&](int level) { return po.segment_min_depth * std::ldexp(1.0, level); };
+  std::vector<KeypointPredictor> ladder;  // one predictor per level, made once
+  ladder.reserve(static_cast<size_t>(levels) + 1);
+  for (int level = 0; level <= levels; ++level) {
+    ladder.push_back(predictor.WithSegmentMinDepth(level_depth(level)));
+  }
   auto contains = [&](int level, const KeypointInfo& a, double sigma_scale, const KeypointInfo& b) {
-    const KeypointPredictor p = predictor.WithSegmentMinDepth(level_depth(level));
-    const KeypointPrediction pr = p.Predict(Eigen::Vector2d(a.x, a.y), nan, sigma_scale);
+    const KeypointPrediction pr =
+        ladder[static_cast<size_t>(level)].Predict(Eigen::Vector2d(a.x, a.y), nan, sigma_scale);
     return pr.status == PredictionStatus::kWithoutDepth && pr.Contains(b.x, b.y);
   };
   for (const Match& m : pilot_result.matches) {
@@ -92,14 +94,8 @@ SceneNearDepth PredictKeypointsInScene(
     // The sample is min(ladder depth, along_line): only the ladder's levels up to the first one
     // deeper than along_line matter. When that level's capsule holds the partner, so do all
     // shallower ones and the sample is along_line (one prediction instead of a search).
-    int deeper = levels + 1;  // the first level deeper than along_line (levels + 1: none)
-    if (std::isfinite(along_line)) {
-      deeper =
-          std::clamp(static_cast<int>(std::floor(std::log2(along_line / po.segment_min_depth))) + 1,
-                     0, levels + 1);
-      while (deeper > 0 && level_depth(deeper - 1) > along_line) --deeper;
-      while (deeper <= levels && level_depth(deeper) <= along_line) ++deeper;
-    }
+    int deeper = 0;  // the first level deeper than along_line (levels + 1: none)
+    while (deeper <= levels && level_depth(deeper) <= along_line) ++deeper;
     if (deeper <= levels && contains(deeper, a, sigma_scale, b)) {
       sample_depths.push_back(along_line);
       continue;
