@@ -346,7 +346,25 @@ KeypointPrediction KeypointPredictor::Predict(const Eigen::Vector2d& uv_a, doubl
   p.covariance = (l_near >= l_far ? c_near : c_far).cast<float>();
   double r = options_.fixed_half_size;
   if (options_.window_mode == WindowMode::kUncertainty) {
-    r = std::clamp(std::sqrt(chi2_ * std::max({l_near, l_far, 0.0})), options_.min_half_size,
+    // The capsule holds the gate ellipse of each end moved along the segment: its radius is the
+    // ellipses' extent across the segment, sqrt(chi2 n^T C n), and each end moves out by the
+    // extent along it, sqrt(chi2 d^T C d). An error of the translation's length (the IMU's scale,
+    // which a fit to the images leaves open) moves a point along its epipolar line, not across.
+    double across = std::max(l_near, l_far), out_near = 0.0, out_far = 0.0;
+    const Eigen::Vector2d along = e1 - e0;
+    const double length = along.norm();
+    if (length > 1e-9) {
+      const Eigen::Vector2d d = along / length;
+      const Eigen::Vector2d n(-d.y(), d.x());
+      across = std::max(n.dot(c_near * n), n.dot(c_far * n));
+      out_near = std::sqrt(chi2_ * std::max(d.dot(c_near * d), 0.0));
+      out_far = std::sqrt(chi2_ * std::max(d.dot(c_far * d), 0.0));
+      e0 -= out_near * d;
+      e1 += out_far * d;
+      p.segment_start = e0.cast<float>();
+      p.segment_end = e1.cast<float>();
+    }
+    r = std::clamp(std::sqrt(chi2_ * std::max(across, 0.0)), options_.min_half_size,
                    options_.max_half_size);
   }
   p.radius = static_cast<float>(r);

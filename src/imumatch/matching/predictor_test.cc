@@ -2,10 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <random>
 
 #include <gtest/gtest.h>
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 
 #include "imumatch/core/error.h"
 #include "imumatch/core/so3.h"
@@ -167,20 +170,85 @@ TEST(PredictorTest, EpipolarSegmentContainsTrueProjectionForDepthsInRange) {
           truth.cast<float>() + 2.0f * p.radius * Eigen::Vector2f(-dir.y(), dir.x());
       EXPECT_FALSE(p.Contains(off.x(), off.y()));
     }
-    // The segment starts at the z_min end: the projection at 0.5 m (when not clipped).
+    // The segment runs from the z_min end (the projection at 0.5 m, when not clipped) to the
+    // rotation-only prediction (depth infinity), each moved out along the line by the gate's
+    // extent along it: sqrt(9.21 d^T C d) <= sqrt(9.21 * the covariance's largest eigenvalue).
+    const double out =
+        std::sqrt(9.2103 * p.covariance.cast<double>().eigenvalues().real().maxCoeff());
     const Eigen::Vector3d near_b = motion.cam_b_from_cam_a * cam.Unproject(pix, 0.5);
     const Eigen::Vector2d near(500.0 * near_b.x() / near_b.z() + 320.0,
                                480.0 * near_b.y() / near_b.z() + 240.0);
     if (cam.IsInside(near)) {
-      EXPECT_LT((p.segment_start.cast<double>() - near).norm(), 1e-2);
+      EXPECT_LT(std::sqrt(p.SegmentDistanceSquared(static_cast<float>(near.x()),
+                                                   static_cast<float>(near.y()))),
+                1e-2);
+      EXPECT_GT((p.segment_start.cast<double>() - near).norm(), 1.0);  // moved out
+      EXPECT_LT((p.segment_start.cast<double>() - near).norm(), out + 1e-2);
     }
-    // The far end is the rotation-only prediction when it is inside the image.
     if (cam.IsInside(p.uv.cast<double>())) {
-      EXPECT_LT((p.segment_end - p.uv).norm(), 1e-2);
+      EXPECT_LT(std::sqrt(p.SegmentDistanceSquared(p.uv.x(), p.uv.y())), 1e-2f);
+      EXPECT_LT((p.segment_end - p.uv).norm(), out + 1e-2);
     }
   }
   EXPECT_GT(tested, 150);
   EXPECT_EQ(inside, tested);
+}
+
+// A motion whose translation is known in direction but not in length (what a fit to the images
+// leaves: epipolar distances do not see the length) moves a point without depth along its epipolar
+// line, not across it: the capsule stays thin and its ends move out. Checked against Monte Carlo
+// draws of the motion and of the depth.
+TEST(PredictorTest, CapsuleIsThinAcrossAndLongAlongWhenOnlyTheLengthIsUncertain) {
+  const PinholeCamera cam = TestCamera();
+  const Eigen::Vector3d t(0.1, 0.0, 0.02);
+  CameraMotion motion = MakeMotion(FromEulerZYX(0.01, 0.02, -0.01), t);
+  const Eigen::Vector3d dir = t.normalized();
+  motion.covariance.topLeftCorner<3, 3>() = 1e-8 * Eigen::Matrix3d::Identity();  // 1e-4 rad
+  motion.covariance.bottomRightCorner<3, 3>() =
+      0.02 * 0.02 * dir * dir.transpose() +                                 // length: 2 cm
+      1e-4 * 1e-4 * (Eigen::Matrix3d::Identity() - dir * dir.transpose());  // across: 0.1 mm
+  PredictionOptions options;
+  options.keypoint_sigma_px = 0.0;  // motion only
+  options.min_half_size = 0.0;
+  options.segment_min_depth = 1.0;
+  options.segment_max_depth = std::numeric_limits<double>::infinity();
+  const KeypointPredictor predictor(cam, motion, options);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> uu(40, 600), uv(40, 440), urho(1.0 / 30.0, 1.0);
+  std::normal_distribution<double> n01;
+  const Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(motion.covariance);
+  const Eigen::Matrix<double, 6, 6> l = llt.matrixL();
+  int tested = 0, inside = 0;
+  double max_radius = 0.0, max_eigen_radius = 0.0;
+  for (int k = 0; k < 300; ++k) {
+    const Eigen::Vector2d pix(uu(rng), uv(rng));
+    const KeypointPrediction p = predictor.Predict(pix, std::nan(""));
+    if (p.status != PredictionStatus::kWithoutDepth) continue;
+    max_radius = std::max(max_radius, static_cast<double>(p.radius));
+    max_eigen_radius =
+        std::max(max_eigen_radius,
+                 std::sqrt(9.2103 * p.covariance.cast<double>().eigenvalues().real().maxCoeff()));
+    for (int s = 0; s < 20; ++s) {
+      Eigen::Matrix<double, 6, 1> z;
+      for (int i = 0; i < 6; ++i) z[i] = n01(rng);
+      const Eigen::Matrix<double, 6, 1> d = l * z;
+      const Eigen::Vector3d p_b = ExpSO3(d.head<3>()) * (motion.cam_b_from_cam_a.rotation *
+                                                         cam.Unproject(pix, 1.0 / urho(rng))) +
+                                  t + d.tail<3>();
+      const std::optional<Eigen::Vector2d> uv_b = cam.Project(p_b);
+      if (!uv_b || !cam.IsInside(*uv_b)) continue;
+      ++tested;
+      inside += p.Contains(static_cast<float>(uv_b->x()), static_cast<float>(uv_b->y())) ? 1 : 0;
+    }
+  }
+  ASSERT_GT(tested, 3000);
+  // The gate's 99 % (the capsule holds each end's gate ellipse, so a little more).
+  EXPECT_GE(static_cast<double>(inside) / tested, 0.99);
+  // Across: the rotation (1e-4 rad -> 0.05 px) and 0.1 mm at 1 m (0.05 px), times 3.03.
+  EXPECT_LT(max_radius, 0.6);
+  // A radius from the largest eigenvalue (the length's 2 cm: up to 10 px at 1 m) would be far
+  // wider.
+  EXPECT_GT(max_eigen_radius, 10.0 * max_radius);
 }
 
 TEST(PredictorTest, DistortedLensPredictsInIdealPixels) {
