@@ -58,6 +58,7 @@ struct CommonArgs {
   double z_min = -1.0, z_max = -1.0;  // < 0: PredictionOptions defaults
   bool fixed_segments = false;
   bool no_refine = false;
+  bool single_pass = false;
   double guided_ratio = -1.0;           // < 0: --ratio
   double orientation_tolerance = -1.0;  // < 0: GuidedMatcherOptions default
   double still_s = 1.0;
@@ -121,6 +122,9 @@ void AddCommonOptions(CLI::App* cmd, CommonArgs& a) {
                   "orientation check)");
   cmd->add_flag("--no-refine", a.no_refine,
                 "guided: do not refine matched positions to sub-pixel accuracy");
+  cmd->add_flag("--single-pass", a.single_pass,
+                "guided: match once with the IMU's windows (no second pass with the motion fitted "
+                "to the first pass's matches)");
   cmd->add_option("--threads", a.threads,
                   "worker threads (0 = all cores); 1 also reads frames inline instead of on a "
                   "reader thread")
@@ -168,6 +172,7 @@ EvaluationOptions MakeOptions(const CommonArgs& a) {
   if (a.z_max >= 0.0) o.prediction.segment_max_depth = a.z_max;
   o.prediction.scene_near.enabled = !a.fixed_segments;
   o.refine_subpixel = !a.no_refine;
+  o.second_pass = !a.single_pass;
   if (a.orientation_tolerance >= 0.0) o.guided.orientation_tolerance_deg = a.orientation_tolerance;
   if (a.sigma_scaling == "none") {
     o.prediction.sigma_scaling = KeypointSigmaScaling::kNone;

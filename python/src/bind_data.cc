@@ -71,13 +71,15 @@ std::vector<MatchMethod> Methods(const std::vector<std::string>& names) {
 py::object Evaluate(EvalSource source, const std::vector<std::string>& detectors,
                     const std::vector<std::string>& methods, size_t max_pairs, int step,
                     double interval_s, const std::string& motion_source, int max_keypoints,
-                    std::optional<double> threshold_px, bool refine, uint64_t seed, bool details) {
+                    std::optional<double> threshold_px, bool refine, bool second_pass,
+                    uint64_t seed, bool details) {
   EvaluationOptions o;
   o.detectors = Detectors(detectors);
   o.methods = Methods(methods);
   o.features.max_keypoints = max_keypoints;
   o.motion_source = ParseMotionSource(motion_source);
   o.refine_subpixel = refine;
+  o.second_pass = second_pass;
   o.seed = seed;
   std::vector<std::string> notes;
   if (o.motion_source == MotionSource::kImu && source.dataset.imu.empty()) {
@@ -285,7 +287,7 @@ truth is exact. Rendering costs ~0.1 s per 640 x 480 frame.)");
       [](const py::object& dataset, const std::vector<std::string>& detectors,
          const std::vector<std::string>& methods, size_t max_pairs, int step, double interval_s,
          const std::string& motion_source, int max_keypoints, std::optional<double> threshold_px,
-         bool refine, uint64_t seed, bool details, const std::string& imu_model) {
+         bool refine, bool second_pass, uint64_t seed, bool details, const std::string& imu_model) {
         EvalSource source;
         if (py::isinstance<SyntheticSequence>(dataset)) {
           source = MakeSyntheticSource(dataset.cast<const SyntheticSequence&>(), "");
@@ -298,7 +300,8 @@ truth is exact. Rendering costs ~0.1 s per 640 x 480 frame.)");
           source = MakeDiskSource(LoadDatasetOrPosePair(dataset.cast<std::string>(), dopts));
         }
         return Evaluate(std::move(source), detectors, methods, max_pairs, step, interval_s,
-                        motion_source, max_keypoints, threshold_px, refine, seed, details);
+                        motion_source, max_keypoints, threshold_px, refine, second_pass, seed,
+                        details);
       },
       py::arg("dataset"),
       py::arg("detectors") =
@@ -306,12 +309,13 @@ truth is exact. Rendering costs ~0.1 s per 640 x 480 frame.)");
       py::arg("methods") = std::vector<std::string>{"bf", "guided", "fixed10"},
       py::arg("max_pairs") = 0, py::arg("step") = 1, py::arg("interval_s") = 0.0,
       py::arg("motion_source") = "imu", py::arg("max_keypoints") = 1000,
-      py::arg("threshold_px") = py::none(), py::arg("refine") = true, py::arg("seed") = 42,
-      py::arg("details") = false, py::arg("imu_model") = "euroc",
+      py::arg("threshold_px") = py::none(), py::arg("refine") = true, py::arg("second_pass") = true,
+      py::arg("seed") = 42, py::arg("details") = false, py::arg("imu_model") = "euroc",
       R"(Compares IMU-guided and brute-force matching on a dataset (a path, a Dataset or a
 SyntheticSequence), judged by its ground truth, as `imumatch eval` does. Returns the summary: one
 dict per case, detector and method (matches, correct, false, precision, recall, window_recall,
-times in ms, threshold_px). details=True returns {'rows', 'threshold', 'notes', 'skipped', ...}.)");
+times in ms, threshold_px). details=True returns {'rows', 'threshold', 'notes', 'skipped', ...}.
+second_pass=False: the guided method matches once, in the IMU's windows (`--single-pass`).)");
 }
 
 }  // namespace imumatch::python

@@ -363,6 +363,36 @@ TEST(EvalFlightTest, InFlightTheSegmentsStartWhereTheSceneDoes) {
   }
 }
 
+TEST(EvalFlightTest, InFlightTheSecondPassShrinksTheWindows) {
+  // Pairs 100-119: the motion fitted to the first pass's matches is tighter than the IMU's, so
+  // the second pass searches smaller windows (the window recall above is that of its windows)
+  // in almost every pair.
+  const FlightRun& run = FlightImu();
+  for (DetectorKind d : {DetectorKind::kOrb, DetectorKind::kSift}) {
+    SCOPED_TRACE(ToString(d));
+    int ran = 0;
+    for (const auto& r : run.result.records) {
+      if (r.detector != d || r.frame_a < 100) continue;
+      for (const auto& mr : r.runs) {
+        if (mr.method != MatchMethod::kGuided) continue;
+        if (mr.second_pass != SecondPassOutcome::kRan) continue;
+        ++ran;
+        // ORB's windows are the motion's as much as the keypoints' (fine keypoints); SIFT's are
+        // the keypoints' own noise (its sizes), which no fit shrinks.
+        if (d == DetectorKind::kOrb) {
+          EXPECT_LT(mr.window_px, 0.95 * mr.first_window_px) << r.frame_a;
+        }
+        EXPECT_LE(mr.refit.sigma_px, std::sqrt(2.0)) << r.frame_a;
+        // The fit and the IMU agree with the ground truth to millimetres and thousandths of a
+        // degree (its error is of the ground truth's own size).
+        EXPECT_LT(mr.refit_translation_error_m, 0.02) << r.frame_a;
+        EXPECT_LT(mr.refit_rotation_error_deg, 0.05) << r.frame_a;
+      }
+    }
+    EXPECT_GE(ran, 18);
+  }
+}
+
 TEST(EvalFlightTest, GuidedBeatsBruteForceWithAndWithoutDepth) {
   const FlightRun& run = FlightImu();
   const auto split = SplitByDepth(run.result.records);

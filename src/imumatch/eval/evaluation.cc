@@ -84,6 +84,41 @@ struct CachedFeatures {
   double ideal_ms = 0.0;            // mapping to ideal pixels
 };
 
+}  // namespace
+
+const char* ToString(SecondPassOutcome outcome) {
+  switch (outcome) {
+    case SecondPassOutcome::kNotTried:
+      return "not_tried";
+    case SecondPassOutcome::kRan:
+      return "ran";
+    case SecondPassOutcome::kNoFit:
+      return "no_fit";
+    case SecondPassOutcome::kFitDisagreed:
+      return "fit_disagreed";
+    case SecondPassOutcome::kNotTighter:
+      return "not_tighter";
+  }
+  return "?";
+}
+
+namespace {
+
+// The mean half size (px) of the predictions' search windows: the capsule's radius without depth,
+// the mean of the box's half width and height with it; 0 when none has a window.
+double MeanWindowHalfSize(const std::vector<KeypointPrediction>& predictions) {
+  double sum = 0.0;
+  int n = 0;
+  for (const KeypointPrediction& p : predictions) {
+    if (!p.HasWindow()) continue;
+    sum += p.status == PredictionStatus::kWithoutDepth
+               ? static_cast<double>(p.radius)
+               : 0.25 * static_cast<double>(p.max_x - p.min_x + p.max_y - p.min_y);
+    ++n;
+  }
+  return n > 0 ? sum / n : 0.0;
+}
+
 // Runs one method on one detector's features.
 MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
                     const CameraMotion& motion, const CachedFeatures& ca, const CachedFeatures& cb,
@@ -175,6 +210,37 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
       MatchGuided(predictions, ca.ideal, DescriptorView::FromMat(fa.descriptors), cb.ideal, grid_b,
                   DescriptorView::FromMat(fb.descriptors), options.guided, &scratch);
   run.match_ms = MsSince(t0);
+  if (options.second_pass && method == MatchMethod::kGuided) {
+    // Second pass: the motion fitted to the first pass's matches, windows from its covariance,
+    // when they search less than the first pass's. The fit and the new predictions are charged to
+    // the prediction stage, the search to matching.
+    run.first_window_px = MeanWindowHalfSize(predictions);
+    t0 = Clock::now();
+    run.refit = RefitMotion(motion, result.matches, fa.keypoints, fb.keypoints, depths, popts,
+                            undistorter, options.refit);
+    run.second_pass = run.refit.ok          ? SecondPassOutcome::kRan
+                      : run.refit.disagrees ? SecondPassOutcome::kFitDisagreed
+                                            : SecondPassOutcome::kNoFit;
+    std::vector<KeypointPrediction> second;
+    if (run.refit.ok) {
+      PredictKeypoints(SecondPassPredictor(undistorter, run.refit, popts, run.scene_near), ca.ideal,
+                       depths, &second);
+      if (!(SearchArea(second) < SearchArea(predictions))) {
+        run.second_pass = SecondPassOutcome::kNotTighter;
+      }
+    }
+    run.refit_ms = MsSince(t0);
+    run.predict_ms += run.refit_ms;
+    if (run.second_pass == SecondPassOutcome::kRan) {
+      predictions.swap(second);
+      t0 = Clock::now();
+      result =
+          MatchGuided(predictions, ca.ideal, DescriptorView::FromMat(fa.descriptors), cb.ideal,
+                      grid_b, DescriptorView::FromMat(fb.descriptors), options.guided, &scratch);
+      run.match_ms += MsSince(t0);
+    }
+  }
+  run.window_px = MeanWindowHalfSize(predictions);
   run.stats = result.stats;
   run.outcomes = std::move(result.outcomes);
   matches = std::move(result.matches);
@@ -434,6 +500,13 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
         MethodRun run = RunMethod(method, undistorter, motion->motion, ca, cb, item.a, item.b,
                                   options, matches, predictions);
         run.residuals = judge.Judge(matches);
+        if (run.refit.ok) {
+          const Rigid3d& fitted = run.refit.motion.cam_b_from_cam_a;
+          run.refit_rotation_error_deg =
+              RotationDistance(fitted.rotation, gt.cam_b_from_cam_a.rotation) * 180.0 / M_PI;
+          run.refit_translation_error_m =
+              (fitted.translation - gt.cam_b_from_cam_a.translation).norm();
+        }
         if (IsBruteForce(method) && rec.bf_run < 0) {
           rec.bf_run = static_cast<int>(m);
           bf_matches = matches;

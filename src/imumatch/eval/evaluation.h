@@ -26,11 +26,31 @@ namespace imumatch {
 
 // PadBinaryDescriptors (AKAZE's 61-byte rows for DescriptorView): matching/descriptor_distance.h.
 
+enum class SecondPassOutcome {
+  kNotTried,      // not the guided method, or --single-pass
+  kRan,           // matched again in the fitted motion's windows
+  kNoFit,         // no fit (too few matches, residuals beyond the keypoints' noise, no convergence)
+  kFitDisagreed,  // the fit strayed beyond the IMU's uncertainty: the first pass stands
+  kNotTighter,    // the fitted windows search no less than the first pass's: it stands
+};
+const char* ToString(SecondPassOutcome outcome);  // "not_tried", "ran", ...
+
 struct MethodRun {
   MatchMethod method = MatchMethod::kBruteForce;
   double predict_ms = 0.0;  // depth lookup + prediction (guided methods only)
   double match_ms = 0.0;    // grid + matching, or brute force
   double refine_ms = 0.0;   // sub-pixel refinement (guided, when enabled)
+  // Guided, second pass (EvaluationOptions::second_pass): what happened, the fit, its cost
+  // (included in predict_ms), and the search windows' mean half size (px; the capsule's radius
+  // without depth) of the first pass and of the final one.
+  SecondPassOutcome second_pass = SecondPassOutcome::kNotTried;
+  MotionRefit refit;
+  double refit_ms = 0.0;
+  double first_window_px = 0.0;
+  double window_px = 0.0;
+  // The fitted motion against the ground truth (when refit.ok), as the record's motion errors.
+  double refit_rotation_error_deg = 0.0;
+  double refit_translation_error_m = 0.0;
   SubpixelStats refine_stats;
   // Tracking methods: how every track ended; hybrid: how many correspondences each path made.
   TrackStats track_stats;

@@ -8,6 +8,7 @@
 
 #include "imumatch/eval/ground_truth.h"
 #include "imumatch/features/feature_factory.h"
+#include "imumatch/frontend/motion_refit.h"
 #include "imumatch/imu/camera_motion.h"
 #include "imumatch/matching/guided_matcher.h"
 #include "imumatch/matching/klt_tracker.h"
@@ -72,6 +73,11 @@ struct EvaluationOptions {
   // warped by the IMU's prediction (RefineMatches); the judge then judges the refined position.
   bool refine_subpixel = true;
   SubpixelOptions subpixel;
+  // Guided method: fit the motion to the first pass's matches (RefitMotion) and match again with
+  // the windows of the fitted motion's covariance; the first pass stands when the fit fails or
+  // disagrees with the IMU.
+  bool second_pass = true;
+  MotionRefitOptions refit;
   GroundTruthOptions ground_truth;
   // Tracking methods: the seeded tracker (klt, hybrid) and the unseeded baseline (klt0, with
   // VINS-Fusion's settings: 21 x 21 window, 3 levels, forward-backward <= 0.5 px).

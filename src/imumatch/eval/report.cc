@@ -68,6 +68,16 @@ std::string MarkdownReport(const EvaluationResult& result, const ReportContext& 
            "segments, needs (never nearer than the configured --z-min).\n\n"
         << scene_near;
   }
+  const std::string second_pass = MarkdownSecondPassTable(result.records);
+  if (!second_pass.empty()) {
+    out << "\n## Second pass: windows from the motion fitted to the first pass\n\n"
+        << "The guided method fits the motion to its first matches (the IMU's motion as the prior, "
+           "reprojection errors with depth, epipolar distances without; Cauchy-weighted) and "
+           "matches again in the windows of the fitted motion's covariance when they search less "
+           "than the first pass's; the first pass stands when the fit strays beyond the IMU's "
+           "uncertainty or its windows are not smaller (--single-pass: never tried).\n\n"
+        << second_pass;
+  }
   out << "\n## Motion given to the predictor vs ground truth (per pair)\n\n"
       << MarkdownMotionErrorTable(result.records);
   const std::string tracking = MarkdownTrackingTable(result.records);
@@ -124,7 +134,8 @@ void WritePairsCsv(std::ostream& out, const std::vector<DetectorPairRecord>& rec
   out << "case,pair,frame_a,frame_b,t_a_ns,t_b_ns,detector,method,keypoints_a,keypoints_b,"
          "keypoints_a_with_depth,read_ms,extract_ms,motion_ms,predict_ms,match_ms,matches,correct,"
          "false,possible,precision,recall,motion_rotation_error_deg,motion_translation_error_m,"
-         "has_depth,window_recall,from_tracks,from_descriptors,segment_near_m\n";
+         "has_depth,window_recall,from_tracks,from_descriptors,segment_near_m,second_pass,"
+         "refit_sigma_px,window_px\n";
   out << std::setprecision(6);
   for (const auto& r : records) {
     for (const auto& run : r.runs) {
@@ -140,7 +151,8 @@ void WritePairsCsv(std::ostream& out, const std::vector<DetectorPairRecord>& rec
           << (r.has_depth ? 1 : 0) << "," << ComputeWindowRecall(r, run, threshold_px).Recall()
           << "," << run.from_tracks << "," << run.from_descriptors << ","
           << (run.stats.predicted_without_depth > 0 ? run.scene_near.segment_min_depth_m : 0.0)
-          << "\n";
+          << "," << ToString(run.second_pass) << "," << (run.refit.ok ? run.refit.sigma_px : 0.0)
+          << "," << run.window_px << "\n";
     }
   }
 }
@@ -224,6 +236,19 @@ nlohmann::json ReportToJson(const EvaluationResult& result, const ReportContext&
       if (run.stats.predicted_without_depth > 0) {
         pairs.back()["segment_near_m"] = run.scene_near.segment_min_depth_m;
         pairs.back()["pilot_matches"] = run.scene_near.pilot_matches;
+      }
+      if (run.second_pass != SecondPassOutcome::kNotTried) {
+        pairs.back()["second_pass"] = {{"outcome", ToString(run.second_pass)},
+                                       {"fit_note", run.refit.reason},
+                                       {"fit_sigma_px", run.refit.sigma_px},
+                                       {"fit_inliers", run.refit.inliers},
+                                       {"fit_iterations", run.refit.iterations},
+                                       {"fit_ms", run.refit_ms},
+                                       {"fit_rotation_error_deg", run.refit_rotation_error_deg},
+                                       {"fit_translation_error_m", run.refit_translation_error_m},
+                                       {"fit_matches_with_depth", run.refit.with_depth},
+                                       {"first_window_px", run.first_window_px},
+                                       {"window_px", run.window_px}};
       }
       if (IsTracking(run.method)) {
         const TrackStats& ts = run.track_stats;

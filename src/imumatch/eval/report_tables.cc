@@ -205,6 +205,57 @@ std::string MarkdownSceneNearTable(const std::vector<DetectorPairRecord>& record
   return out.str();
 }
 
+// The second pass of the guided method per case, detector and method: how often it ran, why it
+// did not, the fit's residual and the windows before and after; empty when it never was tried.
+std::string MarkdownSecondPassTable(const std::vector<DetectorPairRecord>& records) {
+  struct Acc {
+    int tried = 0, ran = 0, disagreed = 0, not_tighter = 0, no_fit = 0;
+    std::vector<double> sigma, first_window, window;
+  };
+  std::map<std::tuple<std::string, int, int>, Acc> acc;
+  std::vector<std::string> order;
+  for (const auto& r : records) {
+    for (const auto& run : r.runs) {
+      if (run.second_pass == SecondPassOutcome::kNotTried) continue;
+      if (std::find(order.begin(), order.end(), r.case_name) == order.end())
+        order.push_back(r.case_name);
+      Acc& a = acc[{r.case_name, static_cast<int>(r.detector), static_cast<int>(run.method)}];
+      ++a.tried;
+      a.first_window.push_back(run.first_window_px);
+      a.window.push_back(run.window_px);
+      if (run.refit.ok) a.sigma.push_back(run.refit.sigma_px);
+      a.ran += run.second_pass == SecondPassOutcome::kRan ? 1 : 0;
+      a.disagreed += run.second_pass == SecondPassOutcome::kFitDisagreed ? 1 : 0;
+      a.not_tighter += run.second_pass == SecondPassOutcome::kNotTighter ? 1 : 0;
+      a.no_fit += run.second_pass == SecondPassOutcome::kNoFit ? 1 : 0;
+    }
+  }
+  if (acc.empty()) return "";
+  std::ostringstream out;
+  out << "| Case | Detector | Method | pairs | second pass ran | first pass kept: fit disagreed "
+         "with the IMU / windows not smaller / no fit (residuals beyond the keypoints' noise, too "
+         "few) | fit residual sigma px: median / max | "
+         "window half size px: first pass -> final (median) |\n"
+         "|---|---|---|---:|---:|---:|---:|---:|\n";
+  for (const auto& c : order) {
+    for (const auto& [key, a] : acc) {
+      if (std::get<0>(key) != c) continue;
+      out << "| " << c << " | " << ToString(static_cast<DetectorKind>(std::get<1>(key))) << " | "
+          << DisplayName(static_cast<MatchMethod>(std::get<2>(key))) << " | " << a.tried << " | "
+          << a.ran << " | " << a.disagreed << " / " << a.not_tighter << " / " << a.no_fit << " | ";
+      if (a.sigma.empty()) {
+        out << "- | ";
+      } else {
+        out << FormatFixed(ComputeStageStats(a.sigma).p50, 2) << " / "
+            << FormatFixed(*std::max_element(a.sigma.begin(), a.sigma.end()), 2) << " | ";
+      }
+      out << FormatFixed(ComputeStageStats(a.first_window).p50, 1) << " -> "
+          << FormatFixed(ComputeStageStats(a.window).p50, 1) << " |\n";
+    }
+  }
+  return out.str();
+}
+
 std::string MarkdownMotionErrorTable(const std::vector<DetectorPairRecord>& records) {
   std::map<std::string, std::vector<double>> rot, trans;
   std::vector<std::string> order;

@@ -28,6 +28,9 @@ std::string MarkdownMotionErrorTable(const std::vector<DetectorPairRecord>& reco
 // case, detector and method: near end min / median / max, pairs whose near end moved, pilot
 // matches; "" when no record predicted a keypoint without depth.
 std::string MarkdownSceneNearTable(const std::vector<DetectorPairRecord>& records);
+// The guided method's second pass (motion fitted to the first pass): pairs where it ran, why it
+// did not, the fit's residual, the windows before and after. Empty when it was never tried.
+std::string MarkdownSecondPassTable(const std::vector<DetectorPairRecord>& records);
 // How the tracks of the tracking methods (klt0, klt, hybrid) ended, mean per pair; "" when no
 // record has a tracking run.
 std::string MarkdownTrackingTable(const std::vector<DetectorPairRecord>& records);

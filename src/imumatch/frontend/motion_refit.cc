@@ -1,0 +1,365 @@
+#include "imumatch/frontend/motion_refit.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+#include "imumatch/core/error.h"
+#include "imumatch/core/so3.h"
+
+namespace imumatch {
+namespace {
+
+// The x with P(chi-square, 6 dof <= x) = p: 1 - exp(-x/2) (1 + x/2 + x^2/8) = p, by bisection.
+double ChiSquare6Quantile(double p) {
+  auto cdf = [](double x) { return 1.0 - std::exp(-0.5 * x) * (1.0 + 0.5 * x + 0.125 * x * x); };
+  double lo = 0.0, hi = 200.0;
+  for (int i = 0; i < 100; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (cdf(mid) < p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+Eigen::Vector3d Bearing(const PinholeCamera& camera, const Eigen::Vector2d& ideal) {
+  return Eigen::Vector3d((ideal.x() - camera.cx) / camera.fx, (ideal.y() - camera.cy) / camera.fy,
+                         1.0);
+}
+
+// The median epipolar distance (ideal px) of the correspondences (bearings in A already rotated
+// into B's orientation, ra = R x_a) for translation t.
+double MedianEpipolarDistance(const std::vector<Eigen::Vector3d>& ra,
+                              const std::vector<Eigen::Vector3d>& xb, const Eigen::Vector3d& t,
+                              double f, std::vector<double>& scratch) {
+  scratch.clear();
+  for (size_t i = 0; i < ra.size(); ++i) {
+    const Eigen::Vector3d l = t.cross(ra[i]);
+    const double n2 = l.x() * l.x() + l.y() * l.y();
+    if (n2 > 0.0) scratch.push_back(f * std::fabs(xb[i].dot(l)) / std::sqrt(n2));
+  }
+  if (scratch.empty()) return std::numeric_limits<double>::infinity();
+  const auto mid = scratch.begin() + static_cast<std::ptrdiff_t>(scratch.size() / 2);
+  std::nth_element(scratch.begin(), mid, scratch.end());
+  return *mid;
+}
+
+// The translation direction that the epipolar constraints t . (R x_a x x_b) = 0 favour with the
+// rotation held: the eigenvector of the smallest eigenvalue of sum w_i n_i n_i^T, each row
+// weighted by 1 / |line_i|^2 (so that the algebraic error is the distance in B) and a Cauchy
+// weight on that distance; three reweighted rounds from `start` (the sign kept on its side).
+// Linear algebra only: the distances are strongly nonlinear in the direction when the epipole
+// lies in the image (forward motion), where Gauss-Newton from a direction a few degrees off
+// converges slowly.
+Eigen::Vector3d EpipolarDirection(const std::vector<Eigen::Vector3d>& ra,
+                                  const std::vector<Eigen::Vector3d>& xb,
+                                  const Eigen::Vector3d& start, double f, double min_sigma,
+                                  double cauchy_scale, std::vector<double>& scratch) {
+  Eigen::Vector3d t = start.normalized();
+  for (int round = 0; round < 3; ++round) {
+    const double sigma =
+        std::max(1.4826 * MedianEpipolarDistance(ra, xb, t, f, scratch), min_sigma);
+    const double c2 = cauchy_scale * cauchy_scale * sigma * sigma;
+    Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
+    for (size_t i = 0; i < ra.size(); ++i) {
+      const Eigen::Vector3d l = t.cross(ra[i]);
+      const double n2 = l.x() * l.x() + l.y() * l.y();
+      if (!(n2 > 0.0)) continue;
+      const Eigen::Vector3d nrm = ra[i].cross(xb[i]);
+      const double e = f * xb[i].dot(l) / std::sqrt(n2);
+      const double w = 1.0 / ((1.0 + e * e / c2) * n2);
+      m.noalias() += w * nrm * nrm.transpose();
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(m);
+    if (es.info() != Eigen::Success) break;
+    Eigen::Vector3d next = es.eigenvectors().col(0);
+    if (!next.allFinite()) break;
+    t = next.dot(start) < 0.0 ? Eigen::Vector3d(-next) : next;
+  }
+  return t;
+}
+
+}  // namespace
+
+void MotionRefitOptions::Check() const {
+  IMUMATCH_CHECK(std::isfinite(min_residual_px) && min_residual_px > 0.0,
+                 "min_residual_px=" << min_residual_px);
+  IMUMATCH_CHECK(std::isfinite(cauchy_scale) && cauchy_scale > 0.0,
+                 "cauchy_scale=" << cauchy_scale);
+  IMUMATCH_CHECK(std::isfinite(inlier_sigmas) && inlier_sigmas > 0.0,
+                 "inlier_sigmas=" << inlier_sigmas);
+  IMUMATCH_CHECK(min_inliers >= 6, "min_inliers=" << min_inliers << " (a motion has 6 dof)");
+  IMUMATCH_CHECK(iterations >= 1 && iterations <= 100, "iterations=" << iterations);
+  IMUMATCH_CHECK(reweight_steps >= 1 && reweight_steps <= iterations,
+                 "reweight_steps=" << reweight_steps << " (1 .. iterations=" << iterations << ")");
+  IMUMATCH_CHECK(agreement_probability > 0.0 && agreement_probability < 1.0,
+                 "agreement_probability=" << agreement_probability << " (must be in (0, 1))");
+}
+
+Eigen::Vector2d PositionInB(const Match& m, const std::vector<cv::KeyPoint>& keypoints_b) {
+  if (m.refined_uv_b.allFinite()) return m.refined_uv_b.cast<double>();
+  const cv::Point2f& p = keypoints_b[static_cast<size_t>(m.train_idx)].pt;
+  return Eigen::Vector2d(p.x, p.y);
+}
+
+MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& matches,
+                        const std::vector<cv::KeyPoint>& keypoints_a,
+                        const std::vector<cv::KeyPoint>& keypoints_b,
+                        const std::vector<float>& depths_a, const PredictionOptions& prediction,
+                        const PixelUndistorter& undistorter, const MotionRefitOptions& options) {
+  options.Check();
+  IMUMATCH_CHECK(depths_a.empty() || depths_a.size() == keypoints_a.size(),
+                 depths_a.size() << " depths for " << keypoints_a.size() << " keypoints of A");
+  IMUMATCH_CHECK(prior.covariance.allFinite(), "prior motion covariance is not finite");
+  MotionRefit out;
+  out.motion = prior;
+  const PinholeCamera& camera = undistorter.camera();
+  const double f = 0.5 * (camera.fx + camera.fy);
+
+  // Bearings (z = 1) in A and B; the depth in A (NaN: none).
+  struct Correspondence {
+    Eigen::Vector3d xa, xb;
+    double z;
+  };
+  std::vector<Correspondence> cs;
+  cs.reserve(matches.size());
+  for (const Match& m : matches) {
+    IMUMATCH_CHECK(
+        m.query_idx >= 0 && static_cast<size_t>(m.query_idx) < keypoints_a.size(),
+        "match query " << m.query_idx << " outside A's " << keypoints_a.size() << " keypoints");
+    IMUMATCH_CHECK(
+        m.refined_uv_b.allFinite() ||
+            (m.train_idx >= 0 && static_cast<size_t>(m.train_idx) < keypoints_b.size()),
+        "match train " << m.train_idx << " outside B's " << keypoints_b.size() << " keypoints");
+    const cv::Point2f& ka = keypoints_a[static_cast<size_t>(m.query_idx)].pt;
+    Correspondence c;
+    c.xa = Bearing(camera, undistorter.ToIdeal(Eigen::Vector2d(ka.x, ka.y)));
+    c.xb = Bearing(camera, undistorter.ToIdeal(PositionInB(m, keypoints_b)));
+    c.z = std::numeric_limits<double>::quiet_NaN();
+    if (!depths_a.empty()) {
+      const double z = depths_a[static_cast<size_t>(m.query_idx)];
+      if (prediction.IsUsableDepth(z)) {
+        c.z = z;
+        ++out.with_depth;
+      }
+    }
+    if (!c.xa.allFinite() || !c.xb.allFinite()) continue;
+    cs.push_back(c);
+  }
+  out.correspondences = static_cast<int>(cs.size());
+  if (out.correspondences < options.min_inliers) {
+    out.reason = "too few matches (" + std::to_string(out.correspondences) + ")";
+    return out;
+  }
+
+  Eigen::Matrix<double, 6, 6> prior_cov = prior.covariance;
+  prior_cov.diagonal().array() += 1e-12;  // an exact prior (zero covariance) stays exact
+  const Eigen::Matrix<double, 6, 6> prior_info = prior_cov.inverse();
+  const Eigen::Matrix3d r_prior = prior.cam_b_from_cam_a.RotationMatrix();
+  const Eigen::Vector3d& t_prior = prior.cam_b_from_cam_a.translation;
+  Eigen::Matrix3d r = r_prior;
+  Eigen::Vector3d t = t_prior;
+  // Start: the prior's rotation and length, and the translation direction the epipolar
+  // constraints favour when it explains the matches better than the prior's (a translation
+  // under 1 mm has no direction to estimate).
+  if (t_prior.norm() >= 1e-3) {
+    std::vector<Eigen::Vector3d> ra(cs.size()), xb(cs.size());
+    for (size_t i = 0; i < cs.size(); ++i) {
+      ra[i] = r_prior * cs[i].xa;
+      xb[i] = cs[i].xb;
+    }
+    std::vector<double> scratch;
+    const Eigen::Vector3d dir = EpipolarDirection(ra, xb, t_prior, f, options.min_residual_px,
+                                                  options.cauchy_scale, scratch);
+    if (MedianEpipolarDistance(ra, xb, dir, f, scratch) <
+        MedianEpipolarDistance(ra, xb, t_prior, f, scratch)) {
+      t = t_prior.norm() * dir;
+    }
+  }
+  auto from_prior = [&] {
+    Eigen::Matrix<double, 6, 1> d;
+    d.head<3>() = LogSO3(Eigen::Quaterniond(r * r_prior.transpose()));
+    d.tail<3>() = t - t_prior;
+    return d;
+  };
+
+  // One correspondence's residual (1 or 2 rows, ideal px) and its Jacobian; false when it has
+  // none (behind camera B, or B's bearing on the epipole).
+  Eigen::Vector2d e;
+  Eigen::Matrix<double, 2, 6> j;
+  auto residual = [&](const Correspondence& c, int& rows) {
+    const Eigen::Vector3d ra = r * c.xa;
+    if (std::isfinite(c.z)) {
+      const Eigen::Vector3d pr = ra * c.z;
+      const Eigen::Vector3d q = pr + t;
+      if (!(q.z() > 1e-6)) return false;
+      e = Eigen::Vector2d(f * (q.x() / q.z() - c.xb.x()), f * (q.y() / q.z() - c.xb.y()));
+      Eigen::Matrix<double, 2, 3> dpi;
+      dpi << f / q.z(), 0.0, -f * q.x() / (q.z() * q.z()), 0.0, f / q.z(),
+          -f * q.y() / (q.z() * q.z());
+      // dq / d(dtheta) = -Hat(R p), dq / d(dt) = I; a row a of dpi gives -a Hat(p) = -(a x p)^T.
+      j.block<1, 3>(0, 0) = -dpi.row(0).cross(pr.transpose());
+      j.block<1, 3>(1, 0) = -dpi.row(1).cross(pr.transpose());
+      j.rightCols<3>() = dpi;
+      rows = 2;
+      return true;
+    }
+    // Epipolar line l = t x R x_a in B; e = f (x_b . l) / |(l_x, l_y)|.
+    const Eigen::Vector3d l = t.cross(ra);
+    const double n = std::sqrt(l.x() * l.x() + l.y() * l.y());
+    if (!(n > 1e-12)) return false;
+    e = Eigen::Vector2d(f * c.xb.dot(l) / n, 0.0);
+    // de / dl = f / n (x_b - (x_b . l) / n^2 (l_x, l_y, 0)): zero along l, so e does not change
+    // with t's length. dl / d(dtheta) = -Hat(t) Hat(R x_a), dl / d(dt) = -Hat(R x_a).
+    const Eigen::RowVector3d de_dl =
+        (f / n) *
+        (c.xb.transpose() - (c.xb.dot(l) / (n * n)) * Eigen::RowVector3d(l.x(), l.y(), 0.0));
+    // a Hat(v) = (a x v)^T for a row a: -a Hat(t) Hat(ra) = -((a x t) x ra)^T.
+    j.setZero();
+    j.block<1, 3>(0, 0) = -(de_dl.cross(t.transpose())).cross(ra.transpose());
+    j.block<1, 3>(0, 3) = -de_dl.cross(ra.transpose());
+    rows = 1;
+    return true;
+  };
+
+  // Per iteration: every residual and Jacobian once, their robust sigma, then the normal
+  // equations of the Cauchy-weighted residuals and the prior.
+  // Per iteration: every residual and Jacobian once; while reweighting, their robust sigma and
+  // Cauchy weights; then the normal equations of the weighted residuals and the prior.
+  // Reweighting every step converges only linearly (about halving the error per step on MH_05),
+  // so the sigma and the weights are frozen after options.reweight_steps steps: Gauss-Newton on
+  // the fixed weighted problem then converges in one or two more.
+  struct Row {
+    Eigen::Matrix<double, 2, 6> j;
+    Eigen::Vector2d e;
+    int rows;  // 2: reprojection; 1: epipolar (e[1] and j's second row zero); 0: none
+  };
+  std::vector<Row> rs(cs.size());
+  std::vector<double> weight(cs.size(), 0.0);
+  std::vector<double> abs_rows;
+  abs_rows.reserve(2 * cs.size());
+  Eigen::Matrix<double, 6, 6> info = Eigen::Matrix<double, 6, 6>::Zero();
+  double sigma = options.min_residual_px;
+  double last_step2 = std::numeric_limits<double>::infinity();  // squared, in the fit's sigmas
+  bool reweight = true;
+  for (int iteration = 0; iteration <= options.iterations; ++iteration) {
+    // Reweight until the sigma settles (within 1 % of the previous step's) or reweight_steps.
+    reweight = reweight && iteration < options.reweight_steps;
+    abs_rows.clear();
+    for (size_t i = 0; i < cs.size(); ++i) {
+      Row& row = rs[i];
+      row.rows = 0;
+      if (!residual(cs[i], row.rows)) continue;
+      row.j = j;
+      row.e = e;
+      abs_rows.push_back(std::fabs(e[0]));
+      if (row.rows == 2) abs_rows.push_back(std::fabs(e[1]));
+    }
+    if (abs_rows.empty()) break;
+    bool reweighted = false;
+    if (reweight) {
+      const auto mid = abs_rows.begin() + static_cast<std::ptrdiff_t>(abs_rows.size() / 2);
+      std::nth_element(abs_rows.begin(), mid, abs_rows.end());
+      const double next = std::max(1.4826 * *mid, options.min_residual_px);
+      reweight = iteration == 0 || std::fabs(next - sigma) > 0.01 * sigma;
+      reweighted = true;
+      sigma = next;
+    }
+    const double c2 = options.cauchy_scale * options.cauchy_scale * sigma * sigma;
+    const double inlier2 = options.inlier_sigmas * options.inlier_sigmas * sigma * sigma;
+    Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
+    out.inliers = 0;
+    for (size_t i = 0; i < cs.size(); ++i) {
+      const Row& row = rs[i];
+      if (row.rows == 0) continue;
+      const double e2 = row.e.squaredNorm();
+      out.inliers += e2 <= inlier2 * row.rows ? 1 : 0;
+      if (reweighted) weight[i] = 1.0 / (1.0 + e2 / (row.rows * c2));
+      h.noalias() += weight[i] * row.j.transpose() * row.j;
+      g.noalias() += weight[i] * row.j.transpose() * row.e;
+    }
+    info = h / (sigma * sigma);
+    if (iteration == options.iterations) break;  // the last pass only evaluates
+    ++out.iterations;
+    const Eigen::Matrix<double, 6, 1> step =
+        -(prior_info + info).ldlt().solve(prior_info * from_prior() + g / (sigma * sigma));
+    if (!step.allFinite()) break;
+    r = ExpSO3(step.head<3>()).toRotationMatrix() * r;
+    t += step.tail<3>();
+    // Converged: the step is below a tenth of the fit's own standard deviation (the windows
+    // around the predictions are at least the keypoints' noise, far wider).
+    last_step2 = step.dot((prior_info + info) * step);
+    if (!reweighted && last_step2 < 1e-2) {
+      iteration = options.iterations - 1;  // one more pass to evaluate at the final motion
+    }
+  }
+  out.sigma_px = sigma;
+  const Eigen::Matrix<double, 6, 1> d = from_prior();
+  out.mahalanobis2 = d.dot(prior_info * d);
+  if (out.inliers < options.min_inliers) {
+    out.reason = "motion fit: " + std::to_string(out.inliers) + " inliers";
+    return out;
+  }
+  // The windows assume the keypoints' localisation noise in both frames (sqrt(2) x
+  // keypoint_sigma_px per axis, before the size scaling): residuals beyond it mean the motion does
+  // not explain the pair (a moving object, a wrong depth map, two motions) and the IMU's wider
+  // windows stand.
+  const double noise_px = std::sqrt(2.0) * prediction.keypoint_sigma_px;
+  if (!(sigma <= noise_px)) {
+    out.reason = "motion fit: residuals (robust sigma " + std::to_string(sigma) +
+                 " px) beyond the keypoints' noise (" + std::to_string(noise_px) + " px)";
+    return out;
+  }
+  // Not converged: the last step was more than the fit's own standard deviation, so the windows
+  // would be centred farther from the optimum than their motion part is wide.
+  if (!(last_step2 <= 1.0)) {
+    out.reason = "motion fit: not converged in " + std::to_string(options.iterations) + " steps";
+    return out;
+  }
+  const double gate = ChiSquare6Quantile(options.agreement_probability);
+  if (!(out.mahalanobis2 <= gate) || !r.allFinite() || !t.allFinite()) {
+    out.disagrees = true;
+    out.reason = "the fit disagrees with the prior motion (squared Mahalanobis distance " +
+                 std::to_string(out.mahalanobis2) + " > " + std::to_string(gate) + ")";
+    return out;
+  }
+  Eigen::Matrix<double, 6, 6> cov = (prior_info + info).inverse();
+  out.ok = cov.allFinite();
+  if (!out.ok) {
+    out.reason = "motion fit: singular information";
+    return out;
+  }
+  out.motion.cam_b_from_cam_a = Rigid3d(Eigen::Quaterniond(r).normalized(), t);
+  out.motion.covariance = 0.5 * (cov + cov.transpose());
+  return out;
+}
+
+KeypointPredictor SecondPassPredictor(const PixelUndistorter& undistorter, const MotionRefit& refit,
+                                      const PredictionOptions& prediction,
+                                      const SceneNearDepth& first_pass_scene) {
+  IMUMATCH_CHECK(refit.ok, "no fitted motion for a second pass: " << refit.reason);
+  const KeypointPredictor predictor(undistorter, refit.motion, prediction);
+  return first_pass_scene.moved
+             ? predictor.WithSegmentMinDepth(first_pass_scene.segment_min_depth_m)
+             : predictor;
+}
+
+double SearchArea(const std::vector<KeypointPrediction>& predictions) {
+  double area = 0.0;
+  for (const KeypointPrediction& p : predictions) {
+    if (!p.HasWindow()) continue;
+    if (p.status == PredictionStatus::kWithoutDepth) {
+      const double r = p.radius;
+      area +=
+          2.0 * r * static_cast<double>((p.segment_end - p.segment_start).norm()) + M_PI * r * r;
+    } else {
+      area += static_cast<double>(p.max_x - p.min_x) * static_cast<double>(p.max_y - p.min_y);
+    }
+  }
+  return area;
+}
+
+}  // namespace imumatch

@@ -1,0 +1,96 @@
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "imumatch/camera/pixel_undistorter.h"
+#include "imumatch/imu/camera_motion.h"
+#include "imumatch/matching/match_types.h"
+#include "imumatch/matching/predictor.h"
+
+namespace imumatch {
+
+// The motion that a first guided pass's matches show, with the fit's own covariance, for a second
+// pass whose windows shrink to it: the IMU's prediction is good to a few pixels (velocity, gravity
+// and bias errors), a pose fitted on hundreds of matches to a fraction of one.
+struct MotionRefitOptions {
+  // The residuals' scale is their robust sigma (1.4826 x median absolute residual), at least
+  // min_residual_px (ideal px): a residual below the keypoints' own noise is luck, not accuracy.
+  double min_residual_px = 0.5;
+  // Cauchy loss at cauchy_scale robust sigmas (2.3849: 95 % efficiency on Gaussian residuals):
+  // the first pass's matches all lie in the IMU's windows, but a few are wrong or moving.
+  double cauchy_scale = 2.3849;
+  // A match within inlier_sigmas robust sigmas of the fitted geometry counts as an inlier; fewer
+  // than min_inliers inliers: no fit.
+  double inlier_sigmas = 3.0;
+  int min_inliers = 12;
+  // Gauss-Newton steps. The residuals' sigma and Cauchy weights are re-estimated each step until
+  // the sigma settles (within 1 %) or for reweight_steps, then kept: reweighting every step
+  // converges only linearly (about halving the error per step on EuRoC MH_05). It stops once a
+  // step with fixed weights is below a tenth of the fit's standard deviation; a fit whose last
+  // step was more than one is not used.
+  int reweight_steps = 8;
+  int iterations = 12;
+  // The fit replaces the prior motion only when the two agree: the squared Mahalanobis distance of
+  // the fitted motion from the prior under the prior's covariance within the chi-square quantile
+  // (6 degrees of freedom) of this probability. A fit outside it has locked onto a wrong structure
+  // (a repeated texture, a moving object) or the prior is wrong; either way the prior's wider
+  // windows are the safe ones.
+  double agreement_probability = 0.9999;
+  void Check() const;  // throws InvalidArgument
+};
+
+struct MotionRefit {
+  bool ok = false;         // motion holds the fit; otherwise it is the prior, unchanged
+  bool disagrees = false;  // not ok because the fit lies beyond the prior's uncertainty
+  std::string reason;      // why not ok
+  int correspondences = 0;
+  int with_depth = 0;  // of them, with a usable depth in A (reprojection residuals)
+  int inliers = 0;
+  int iterations = 0;         // Gauss-Newton steps taken
+  double sigma_px = 0.0;      // the residuals' robust sigma (ideal px)
+  double mahalanobis2 = 0.0;  // of the fit from the prior
+  CameraMotion motion;
+};
+
+// Where a correspondence ends in B (image pixels): the refined position or the track's, else the
+// matched keypoint.
+Eigen::Vector2d PositionInB(const Match& m, const std::vector<cv::KeyPoint>& keypoints_b);
+
+// The maximum a posteriori motion A -> B given the prior (the IMU's motion and covariance) and the
+// matches (query: keypoints_a, train: keypoints_b, image pixels; the refined position in B when
+// there is one), with its covariance (the prior's information plus the matches'):
+//  - a match whose keypoint of A has a usable depth (depths_a: metres per keypoint of A, or
+//    empty; prediction.IsUsableDepth) gives its reprojection error in B (2 rows, ideal px);
+//  - one without gives its epipolar distance (1 row, ideal px), which says nothing about the
+//    translation's length: that stays the prior's (the IMU's scale);
+// Gauss-Newton from the prior on the perturbation [dtheta; dt] of CameraMotion (R_true =
+// Exp(dtheta) R, t_true = t + dt), Cauchy-weighted residuals, started from the prior with the
+// translation direction the epipolar constraints favour. Not ok (the prior returned, with the
+// reason) when: too few matches or inliers; the residuals' robust sigma exceeds the keypoints'
+// noise, sqrt(2) x prediction.keypoint_sigma_px (the motion does not explain the pair); no
+// convergence; the fit is beyond agreement_probability of the prior. Throws InvalidArgument for
+// indices outside the keypoints or depths_a of another size.
+MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& matches,
+                        const std::vector<cv::KeyPoint>& keypoints_a,
+                        const std::vector<cv::KeyPoint>& keypoints_b,
+                        const std::vector<float>& depths_a, const PredictionOptions& prediction,
+                        const PixelUndistorter& undistorter, const MotionRefitOptions& options);
+
+// The predictor of a second pass with a fitted motion (refit.ok, else InvalidArgument): the
+// fitted motion and covariance, the segments' near end of the first pass (first_pass_scene).
+KeypointPredictor SecondPassPredictor(const PixelUndistorter& undistorter, const MotionRefit& refit,
+                                      const PredictionOptions& prediction,
+                                      const SceneNearDepth& first_pass_scene);
+
+// The summed area (px^2) of the predictions' search regions: a box's 4 hw hh, a capsule's
+// 2 r L + pi r^2. A second pass is worth its cost only when it searches less than the first: the
+// candidates a window holds, rivals of the true partner in the ratio test, grow with its area.
+// A fit that does not shrink the windows (its residuals larger than the keypoints' noise, or a
+// prior already as tight) is no reason to match again.
+double SearchArea(const std::vector<KeypointPrediction>& predictions);
+
+}  // namespace imumatch

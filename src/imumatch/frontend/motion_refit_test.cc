@@ -1,0 +1,269 @@
+#include "imumatch/frontend/motion_refit.h"
+
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "imumatch/core/error.h"
+#include "imumatch/core/so3.h"
+
+namespace imumatch {
+namespace {
+
+PinholeCamera Camera() { return PinholeCamera::KinectDefault(); }
+
+Rigid3d TrueMotion() {
+  return Rigid3d(ExpSO3(Eigen::Vector3d(0.01, -0.03, 0.02)), Eigen::Vector3d(0.05, -0.02, 0.08));
+}
+
+// Matches of points 2-6 m in front of A seen from B (the true motion): B's positions with Gaussian
+// pixel noise, a share of them replaced by a wrong position a few pixels to 30 px away (inside
+// the windows an IMU would give, as a first pass's false matches are). depths: A's depth per
+// keypoint (exact).
+struct Scene {
+  std::vector<cv::KeyPoint> keypoints_a, keypoints_b;
+  std::vector<Match> matches;
+  std::vector<float> depths;
+};
+Scene MakeScene(const Rigid3d& b_from_a, int n, double noise_px, double outlier_share,
+                uint64_t seed = 3) {
+  const PinholeCamera c = Camera();
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> gauss(0.0, noise_px);
+  Scene s;
+  while (static_cast<int>(s.matches.size()) < n) {
+    const Eigen::Vector2d uv(40 + 560 * u(rng), 40 + 400 * u(rng));
+    const double z = 2.0 + 4.0 * u(rng);
+    const Eigen::Vector3d q = b_from_a * c.Unproject(uv, z);
+    Eigen::Vector2d pb(c.fx * q.x() / q.z() + c.cx, c.fy * q.y() / q.z() + c.cy);
+    if (u(rng) < outlier_share) {
+      const double a = 2.0 * M_PI * u(rng), r = 3.0 + 27.0 * u(rng);
+      pb += r * Eigen::Vector2d(std::cos(a), std::sin(a));
+    } else {
+      pb += Eigen::Vector2d(gauss(rng), gauss(rng));
+    }
+    Match m;
+    m.query_idx = static_cast<int>(s.keypoints_a.size());
+    m.train_idx = static_cast<int>(s.keypoints_b.size());
+    s.keypoints_a.emplace_back(static_cast<float>(uv.x()), static_cast<float>(uv.y()), 7.0f);
+    s.keypoints_b.emplace_back(static_cast<float>(pb.x()), static_cast<float>(pb.y()), 7.0f);
+    s.matches.push_back(m);
+    s.depths.push_back(static_cast<float>(z));
+  }
+  return s;
+}
+
+// The IMU's motion: the truth moved by `offset` ([dtheta; dt]), with a diagonal covariance.
+CameraMotion Prior(const Eigen::Matrix<double, 6, 1>& offset,
+                   const Eigen::Matrix<double, 6, 1>& sigma) {
+  CameraMotion m;
+  m.cam_b_from_cam_a = Rigid3d(ExpSO3(offset.head<3>()) * TrueMotion().rotation,
+                               TrueMotion().translation + offset.tail<3>());
+  m.covariance = sigma.cwiseAbs2().asDiagonal();
+  return m;
+}
+
+// [dtheta; dt] of the truth relative to a motion, as CameraMotion's covariance has it.
+Eigen::Matrix<double, 6, 1> TruthFrom(const Rigid3d& motion) {
+  Eigen::Matrix<double, 6, 1> d;
+  d.head<3>() = LogSO3(TrueMotion().rotation * motion.rotation.inverse());
+  d.tail<3>() = TrueMotion().translation - motion.translation;
+  return d;
+}
+
+Eigen::Matrix<double, 6, 1> Vec6(double a, double b, double c, double d, double e, double f) {
+  Eigen::Matrix<double, 6, 1> v;
+  v << a, b, c, d, e, f;
+  return v;
+}
+
+TEST(MotionRefitTest, WithDepthTheFitHoldsTheTruthAndIsFarTighterThanTheIMU) {
+  const Scene s = MakeScene(TrueMotion(), 300, 0.5, 0.15);
+  const PixelUndistorter und(Camera());
+  // An IMU prediction 2 sigma off on every axis (0.1 deg, 1 cm sigmas).
+  const Eigen::Matrix<double, 6, 1> sigma = Vec6(2e-3, 2e-3, 2e-3, 0.01, 0.01, 0.01);
+  const CameraMotion prior = Prior(2.0 * sigma.cwiseProduct(Vec6(1, -1, 1, -1, 1, 1)), sigma);
+  const MotionRefit r = RefitMotion(prior, s.matches, s.keypoints_a, s.keypoints_b, s.depths,
+                                    PredictionOptions(), und, MotionRefitOptions());
+  ASSERT_TRUE(r.ok) << r.reason;
+  EXPECT_EQ(r.correspondences, 300);
+  EXPECT_EQ(r.with_depth, 300);
+  // 85 % inliers; the outliers start 3 px away, some land within 3 sigma.
+  EXPECT_GT(r.inliers, 250);
+  EXPECT_LT(r.inliers, 280);
+  EXPECT_NEAR(r.sigma_px, 0.5 * 1.08, 0.15);  // robust sigma of 0.5 px noise (plus a few outliers)
+  // The truth within the fit's covariance (chi-square, 6 dof, 99.9 %: 22.46), and the fit far
+  // tighter than the prior on every axis.
+  const Eigen::Matrix<double, 6, 1> e = TruthFrom(r.motion.cam_b_from_cam_a);
+  EXPECT_LT(e.dot(r.motion.covariance.ldlt().solve(e)), 22.46);
+  for (int k = 0; k < 6; ++k) {
+    EXPECT_LT(std::sqrt(r.motion.covariance(k, k)), 0.25 * sigma[k]) << "axis " << k;
+  }
+  // The prior was 6.9e-3 rad and 3.5 cm off.
+  EXPECT_LT(RotationDistance(r.motion.cam_b_from_cam_a.rotation, TrueMotion().rotation), 5e-4);
+  EXPECT_LT((r.motion.cam_b_from_cam_a.translation - TrueMotion().translation).norm(), 3e-3);
+  // The prior was 2 sigma off on 6 axes: squared distance 24 from where the fit lands.
+  EXPECT_NEAR(r.mahalanobis2, 24.0, 3.0);
+}
+
+TEST(MotionRefitTest, WithoutDepthTheDirectionIsFittedAndTheLengthStaysTheIMUs) {
+  const Scene s = MakeScene(TrueMotion(), 300, 0.5, 0.15);
+  const PixelUndistorter und(Camera());
+  const Eigen::Vector3d t = TrueMotion().translation;
+  const Eigen::Vector3d dir = t.normalized();
+  // Rotation 1 sigma off (the gyro is good), translation 2 cm sideways (2 sigma) and 1 cm long.
+  const Eigen::Vector3d side = dir.cross(Eigen::Vector3d::UnitY()).normalized();
+  const Eigen::Matrix<double, 6, 1> sigma = Vec6(2e-4, 2e-4, 2e-4, 0.01, 0.01, 0.01);
+  Eigen::Matrix<double, 6, 1> offset = Vec6(2e-4, -2e-4, 0.0, 0, 0, 0);
+  offset.tail<3>() = 0.02 * side + 0.01 * dir;
+  const CameraMotion prior = Prior(offset, sigma);
+  const MotionRefit r = RefitMotion(prior, s.matches, s.keypoints_a, s.keypoints_b, {},
+                                    PredictionOptions(), und, MotionRefitOptions());
+  ASSERT_TRUE(r.ok) << r.reason;
+  EXPECT_EQ(r.with_depth, 0);
+  const Eigen::Vector3d got = r.motion.cam_b_from_cam_a.translation;
+  const double prior_angle = std::acos(prior.cam_b_from_cam_a.translation.normalized().dot(dir));
+  const double angle = std::acos(std::min(1.0, got.normalized().dot(dir)));
+  EXPECT_GT(prior_angle, 0.18);
+  EXPECT_LT(angle, 0.02);  // 10.6 deg off -> under 1.2 deg
+  // The length is not seen by epipolar distances: it stays the prior's (to the 1 cm it was off).
+  EXPECT_NEAR(got.norm(), prior.cam_b_from_cam_a.translation.norm(), 2e-3);
+  // Across the translation the covariance shrank; along it, it stayed the prior's 1 cm.
+  const Eigen::Matrix3d ct = r.motion.covariance.bottomRightCorner<3, 3>();
+  const Eigen::Vector3d gdir = got.normalized();
+  const Eigen::Vector3d across = gdir.cross(Eigen::Vector3d::UnitX()).normalized();
+  EXPECT_NEAR(std::sqrt(gdir.dot(ct * gdir)), 0.01, 1e-3);
+  EXPECT_LT(std::sqrt(across.dot(ct * across)), 1e-3);
+}
+
+// A first pass on a hard pair (MH_05 at take-off: 35 % judged false).
+TEST(MotionRefitTest, AThirdOfTheMatchesWrongStillGivesTheTruth) {
+  const Scene s = MakeScene(TrueMotion(), 400, 0.5, 0.35, 9);
+  const PixelUndistorter und(Camera());
+  const Eigen::Matrix<double, 6, 1> sigma = Vec6(2e-3, 2e-3, 2e-3, 0.01, 0.01, 0.01);
+  const CameraMotion prior = Prior(sigma, sigma);
+  const MotionRefit r = RefitMotion(prior, s.matches, s.keypoints_a, s.keypoints_b, s.depths,
+                                    PredictionOptions(), und, MotionRefitOptions());
+  ASSERT_TRUE(r.ok) << r.reason;
+  // What the second pass needs: the truth inside the fit's covariance (chi-square 6 dof, 99.9 %),
+  // and that covariance tighter than the prior's.
+  const Eigen::Matrix<double, 6, 1> e = TruthFrom(r.motion.cam_b_from_cam_a);
+  EXPECT_LT(e.dot(r.motion.covariance.ldlt().solve(e)), 22.46);
+  for (int k = 0; k < 6; ++k) {
+    EXPECT_LT(std::sqrt(r.motion.covariance(k, k)), 0.5 * sigma[k]) << "axis " << k;
+  }
+  // The prior was 3.5e-3 rad and 1.7 cm off.
+  EXPECT_LT(RotationDistance(r.motion.cam_b_from_cam_a.rotation, TrueMotion().rotation), 1e-3);
+  EXPECT_LT((r.motion.cam_b_from_cam_a.translation - TrueMotion().translation).norm(), 5e-3);
+}
+
+TEST(MotionRefitTest, AFitFarOutsideThePriorIsRefused) {
+  const Scene s = MakeScene(TrueMotion(), 300, 0.5, 0.0);
+  const PixelUndistorter und(Camera());
+  // A prior sure to 1 mm / 0.006 deg but 3 cm off: the images disagree, the prior stands.
+  const Eigen::Matrix<double, 6, 1> sigma = Vec6(1e-4, 1e-4, 1e-4, 1e-3, 1e-3, 1e-3);
+  const CameraMotion prior = Prior(Vec6(0, 0, 0, 0.03, 0.0, 0.0), sigma);
+  const MotionRefit r = RefitMotion(prior, s.matches, s.keypoints_a, s.keypoints_b, s.depths,
+                                    PredictionOptions(), und, MotionRefitOptions());
+  EXPECT_FALSE(r.ok);
+  EXPECT_NE(r.reason.find("disagrees"), std::string::npos) << r.reason;
+  EXPECT_GT(r.mahalanobis2, 34.0);  // chi-square 6 dof at 0.9999: 33.1 (its gate: 27.86 at 0.9999?)
+  EXPECT_EQ(r.motion.cam_b_from_cam_a.translation, prior.cam_b_from_cam_a.translation);
+  EXPECT_EQ(r.motion.covariance, prior.covariance);
+}
+
+TEST(MotionRefitTest, AnExactPriorStaysExact) {
+  const Scene s = MakeScene(TrueMotion(), 200, 0.5, 0.1);
+  const PixelUndistorter und(Camera());
+  CameraMotion prior;
+  prior.cam_b_from_cam_a = TrueMotion();  // zero covariance: the ground truth
+  const MotionRefit r = RefitMotion(prior, s.matches, s.keypoints_a, s.keypoints_b, s.depths,
+                                    PredictionOptions(), und, MotionRefitOptions());
+  ASSERT_TRUE(r.ok) << r.reason;
+  EXPECT_LT(RotationDistance(r.motion.cam_b_from_cam_a.rotation, TrueMotion().rotation), 1e-7);
+  EXPECT_LT((r.motion.cam_b_from_cam_a.translation - TrueMotion().translation).norm(), 1e-7);
+  EXPECT_LT(r.motion.covariance.diagonal().maxCoeff(), 1.1e-12);
+}
+
+TEST(MotionRefitTest, TooFewMatchesAndBadInput) {
+  const Scene s = MakeScene(TrueMotion(), 8, 0.5, 0.0);
+  const PixelUndistorter und(Camera());
+  const Eigen::Matrix<double, 6, 1> sigma = Vec6(2e-3, 2e-3, 2e-3, 0.01, 0.01, 0.01);
+  const CameraMotion prior = Prior(sigma, sigma);
+  const MotionRefit r = RefitMotion(prior, s.matches, s.keypoints_a, s.keypoints_b, s.depths,
+                                    PredictionOptions(), und, MotionRefitOptions());
+  EXPECT_FALSE(r.ok);
+  EXPECT_NE(r.reason.find("too few"), std::string::npos) << r.reason;
+  std::vector<Match> bad = s.matches;
+  bad[0].query_idx = 99;
+  EXPECT_THROW(RefitMotion(prior, bad, s.keypoints_a, s.keypoints_b, s.depths, PredictionOptions(),
+                           und, MotionRefitOptions()),
+               InvalidArgument);
+  EXPECT_THROW(RefitMotion(prior, s.matches, s.keypoints_a, s.keypoints_b, {1.0f, 2.0f},
+                           PredictionOptions(), und, MotionRefitOptions()),
+               InvalidArgument);
+  MotionRefitOptions o;
+  o.agreement_probability = 1.0;
+  EXPECT_THROW(o.Check(), InvalidArgument);
+  o = MotionRefitOptions();
+  o.min_inliers = 5;
+  EXPECT_THROW(o.Check(), InvalidArgument);
+}
+
+TEST(MotionRefitTest, SecondPassWindowsShrinkToTheFit) {
+  const Scene s = MakeScene(TrueMotion(), 300, 0.5, 0.0);
+  const PixelUndistorter und(Camera());
+  const Eigen::Matrix<double, 6, 1> sigma = Vec6(2e-3, 2e-3, 2e-3, 0.01, 0.01, 0.01);
+  const CameraMotion prior = Prior(sigma, sigma);
+  MotionRefit r = RefitMotion(prior, s.matches, s.keypoints_a, s.keypoints_b, s.depths,
+                              PredictionOptions(), und, MotionRefitOptions());
+  ASSERT_TRUE(r.ok) << r.reason;
+  PredictionOptions po;
+  po.min_half_size = 0.0;
+  const SceneNearDepth scene;
+  const Eigen::Vector2d uv(300.0, 200.0);
+  const KeypointPrediction first = KeypointPredictor(und, prior, po).Predict(uv, 3.0);
+  const KeypointPrediction tight = SecondPassPredictor(und, r, po, scene).Predict(uv, 3.0);
+  // 1 px keypoints: the window is about the keypoints' noise, sqrt(9.21 * 2) = 4.3 px.
+  EXPECT_LT(tight.max_x - tight.min_x, 0.6f * (first.max_x - first.min_x));
+  EXPECT_LT(0.5f * (tight.max_x - tight.min_x), 4.6f);
+  EXPECT_LT(SearchArea({tight}), 0.4 * SearchArea({first}));
+  // The segments keep the first pass's near end.
+  SceneNearDepth moved;
+  moved.moved = true;
+  moved.segment_min_depth_m = 2.0;
+  const KeypointPrediction seg = SecondPassPredictor(und, r, po, moved).Predict(uv, std::nan(""));
+  ASSERT_EQ(seg.status, PredictionStatus::kWithoutDepth);
+  const Eigen::Vector3d near_b = r.motion.cam_b_from_cam_a * Camera().Unproject(uv, 2.0);
+  const Eigen::Vector2d near(Camera().fx * near_b.x() / near_b.z() + Camera().cx,
+                             Camera().fy * near_b.y() / near_b.z() + Camera().cy);
+  EXPECT_LT((seg.segment_start.cast<double>() - near).norm(), 5.0);
+  r.ok = false;
+  EXPECT_THROW(SecondPassPredictor(und, r, po, scene), InvalidArgument);
+}
+
+// Residuals of 3 px where the keypoints promise 1 px: the motion does not explain the matches
+// (here: B's positions scattered), and the IMU's windows stand.
+TEST(MotionRefitTest, ResidualsBeyondTheKeypointsNoiseAreRefused) {
+  const Scene s = MakeScene(TrueMotion(), 300, 3.0, 0.0);
+  const PixelUndistorter und(Camera());
+  const Eigen::Matrix<double, 6, 1> sigma = Vec6(2e-3, 2e-3, 2e-3, 0.01, 0.01, 0.01);
+  const CameraMotion prior = Prior(sigma, sigma);
+  const MotionRefit r = RefitMotion(prior, s.matches, s.keypoints_a, s.keypoints_b, s.depths,
+                                    PredictionOptions(), und, MotionRefitOptions());
+  EXPECT_FALSE(r.ok);
+  EXPECT_FALSE(r.disagrees);
+  EXPECT_GT(r.sigma_px, 2.5);
+  EXPECT_NE(r.reason.find("beyond the keypoints' noise"), std::string::npos) << r.reason;
+  // Keypoints of 3 px localisation noise: the same fit is the one to use.
+  PredictionOptions noisy;
+  noisy.keypoint_sigma_px = 3.0;
+  EXPECT_TRUE(RefitMotion(prior, s.matches, s.keypoints_a, s.keypoints_b, s.depths, noisy, und,
+                          MotionRefitOptions())
+                  .ok);
+}
+
+}  // namespace
+}  // namespace imumatch
