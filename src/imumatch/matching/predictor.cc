@@ -357,8 +357,12 @@ KeypointPrediction KeypointPredictor::Predict(const Eigen::Vector2d& uv_a, doubl
       const Eigen::Vector2d d = along / length;
       const Eigen::Vector2d n(-d.y(), d.x());
       across = std::max(n.dot(c_near * n), n.dot(c_far * n));
-      out_near = std::sqrt(chi2_ * std::max(d.dot(c_near * d), 0.0));
-      out_far = std::sqrt(chi2_ * std::max(d.dot(c_far * d), 0.0));
+      // Clamped as the radius is: no window reaches farther than max_half_size from its
+      // prediction.
+      out_near =
+          std::min(std::sqrt(chi2_ * std::max(d.dot(c_near * d), 0.0)), options_.max_half_size);
+      out_far =
+          std::min(std::sqrt(chi2_ * std::max(d.dot(c_far * d), 0.0)), options_.max_half_size);
       e0 -= out_near * d;
       e1 += out_far * d;
       p.segment_start = e0.cast<float>();

@@ -249,6 +249,22 @@ TEST(PredictorTest, CapsuleIsThinAcrossAndLongAlongWhenOnlyTheLengthIsUncertain)
   // A radius from the largest eigenvalue (the length's 2 cm: up to 10 px at 1 m) would be far
   // wider.
   EXPECT_GT(max_eigen_radius, 10.0 * max_radius);
+
+  // A length known to 1 m (a front end that has lost its velocity): the ends move out by at most
+  // max_half_size, as no window reaches farther than that from its prediction.
+  motion.covariance.bottomRightCorner<3, 3>() = dir * dir.transpose();
+  options.max_half_size = 64.0;
+  const KeypointPredictor lost(cam, motion, options);
+  const Eigen::Vector2d pix(200.0, 300.0);
+  const KeypointPrediction p = lost.Predict(pix, std::nan(""));
+  ASSERT_EQ(p.status, PredictionStatus::kWithoutDepth);
+  const KeypointPrediction exact =
+      KeypointPredictor(cam, MakeMotion(motion.cam_b_from_cam_a.rotation, t), options)
+          .Predict(pix, std::nan(""));
+  const double moved_out =
+      (p.segment_end - exact.segment_end).norm() + (p.segment_start - exact.segment_start).norm();
+  EXPECT_GT(moved_out, 20.0);
+  EXPECT_LE(moved_out, 2.0 * 64.0 + 1e-3);
 }
 
 TEST(PredictorTest, DistortedLensPredictsInIdealPixels) {
