@@ -24,6 +24,7 @@ void FrontEndOptions::Check() const {
   klt.Check();
   motion.Check();
   pose.Check();
+  refit.Check();
   IMUMATCH_CHECK(std::isfinite(still_s) && still_s >= 0.0 && still_s <= 3600.0,
                  "still_s=" << still_s);
   IMUMATCH_CHECK(std::isfinite(unknown_velocity_sigma) && unknown_velocity_sigma > 0.0,
@@ -64,14 +65,6 @@ FrontEnd::FrontEnd(const PinholeCamera& camera, const ImuParams& imu_params,
 void FrontEnd::AddImu(const ImuSample& sample) { imu_.Push(sample, "front end IMU stream"); }
 
 namespace {
-
-// Where a correspondence ends in B (image pixels): the refined position or the track's, else the
-// matched keypoint.
-Eigen::Vector2d PositionInB(const Match& m, const std::vector<cv::KeyPoint>& keypoints_b) {
-  if (m.refined_uv_b.allFinite()) return m.refined_uv_b.cast<double>();
-  const cv::Point2f& p = keypoints_b[static_cast<size_t>(m.train_idx)].pt;
-  return Eigen::Vector2d(p.x, p.y);
-}
 
 // Roll and pitch from a mean specific force f (the accelerometer at rest reads -g in the IMU
 // frame, i.e. points up): the rotation taking f's direction to world +z, yaw zero.
@@ -352,12 +345,28 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
       refined.covariance.bottomRightCorner<3, 3>().diagonal().setConstant(fit_translation_sigma *
                                                                           fit_translation_sigma);
     }
+    // The windows: the motion and covariance RefitMotion finds from the IMU's prior and the first
+    // pass's matches when it can; else the pose fit's with the covariance above.
+    Rigid3d fitted = result.pose.cam_b_from_cam_a;
+    {
+      std::vector<float> depths_a;
+      if (!prev.depth.empty()) {
+        depths_a = SampleDepths(prev.depth, camera.depth_scale, prev.features.keypoints,
+                                options_.prediction.depth_sampling);
+      }
+      const MotionRefit refit = RefitMotion(result.imu_motion, result.matches_pass1,
+                                            prev.features.keypoints, features.keypoints, depths_a,
+                                            options_.prediction, undistorter_, options_.refit);
+      if (refit.ok) {
+        refined = refit.motion;
+        fitted = refit.motion.cam_b_from_cam_a;
+      }
+    }
     std::vector<KeypointPrediction> predictions2;
     int tracks2 = 0;
     std::vector<Match> second = MatchPass(refined, features, ideal, gray, predictions2, tracks2);
     // Keep the matches the fitted geometry explains: reprojection (with depth) or epipolar
     // distance (without) within the fit's inlier threshold, in ideal pixels.
-    const Rigid3d& fitted = result.pose.cam_b_from_cam_a;
     const Eigen::Matrix3d rf = fitted.rotation.toRotationMatrix();
     const Eigen::Vector3d tf = fitted.translation;
     const double f = 0.5 * (camera.fx + camera.fy);

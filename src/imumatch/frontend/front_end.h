@@ -11,6 +11,7 @@
 #include "imumatch/camera/pixel_undistorter.h"
 #include "imumatch/core/rigid3.h"
 #include "imumatch/features/feature_factory.h"
+#include "imumatch/frontend/motion_refit.h"
 #include "imumatch/frontend/pose_estimation.h"
 #include "imumatch/imu/camera_motion.h"
 #include "imumatch/imu/imu_buffer.h"
@@ -58,10 +59,14 @@ struct FrontEndOptions {
   // Fewer matches than this in the first pass: the frame is matched by brute force instead.
   int min_matches = 20;
   PoseFitOptions pose;
-  // Second pass: predict again with the fitted pose (covariance from its residual), match, and
-  // keep the matches the fitted geometry explains (reprojection with depth, epipolar distance
-  // without, within pose.ransac_px).
+  // Second pass: predict again with the motion RefitMotion finds from the IMU's prior and the
+  // first pass's matches, with its covariance (when it fails: the fitted pose, with a covariance
+  // from its residual), match, and keep the matches the fitted geometry explains (reprojection
+  // with depth, epipolar distance without, within pose.ransac_px). Measured on EuRoC MH_05 (199
+  // pairs) against the pose fit's windows: 821.0 -> 826.5 final matches per frame (hybrid 956.6
+  // -> 965.8) at the same precision and relative pose error.
   bool second_pass = true;
+  MotionRefitOptions refit;
   void Check() const;  // throws InvalidArgument
 };
 
