@@ -144,18 +144,13 @@ std::vector<Match> FrontEnd::MatchPass(const CameraMotion& motion, const Feature
                                        int& from_tracks) {
   const Previous& prev = *previous_;
   const PinholeCamera& camera = undistorter_.camera();
-  std::vector<float> depths;
-  if (!prev.depth.empty()) {
-    depths = SampleDepths(prev.depth, camera.depth_scale, prev.features.keypoints,
-                          options_.prediction.depth_sampling);
-  }
   GridIndex grid;
   grid.Build(ideal, camera.width, camera.height,
              static_cast<float>(options_.guided.grid_cell_size));
   GuidedSearchScratch scratch;
   PredictKeypointsInScene(KeypointPredictor(undistorter_, motion, options_.prediction), prev.ideal,
-                          depths, DescriptorView::FromMat(prev.features.descriptors), ideal, grid,
-                          DescriptorView::FromMat(features.descriptors), options_.guided,
+                          prev.depths, DescriptorView::FromMat(prev.features.descriptors), ideal,
+                          grid, DescriptorView::FromMat(features.descriptors), options_.guided,
                           &predictions, &scratch);
   std::vector<Match> out;
   std::vector<KeypointPrediction> rest;
@@ -216,6 +211,10 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
     p.image =
         gray.data == frame.image.data ? gray.clone() : gray;  // the caller may reuse its buffers
     p.depth = frame.depth.clone();
+    if (!frame.depth.empty()) {
+      p.depths = SampleDepths(frame.depth, camera.depth_scale, features.keypoints,
+                              options_.prediction.depth_sampling);
+    }
     p.features = std::move(features);
     p.ideal = ideal;
     p.world_from_cam = world_from_cam;
@@ -301,10 +300,9 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
     const Eigen::Vector2d pb = PositionInB(m, features.keypoints);
     pixels_a.emplace_back(ka.x, ka.y);
     pixels_b.push_back(pb);
-    if (prev.depth.empty()) continue;
-    const double z =
-        SampleDepth(prev.depth, camera.depth_scale, ka.x, ka.y, options_.prediction.depth_sampling);
-    if (!(z >= options_.prediction.min_depth && z <= options_.prediction.max_depth)) continue;
+    if (prev.depths.empty()) continue;
+    const double z = prev.depths[static_cast<size_t>(m.query_idx)];
+    if (!options_.prediction.IsUsableDepth(z)) continue;
     const Eigen::Vector2d ia = undistorter_.ToIdeal(Eigen::Vector2d(ka.x, ka.y));
     points_a.emplace_back((ia.x() - camera.cx) / camera.fx * z,
                           (ia.y() - camera.cy) / camera.fy * z, z);
@@ -348,19 +346,12 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
     // The windows: the motion and covariance RefitMotion finds from the IMU's prior and the first
     // pass's matches when it can; else the pose fit's with the covariance above.
     Rigid3d fitted = result.pose.cam_b_from_cam_a;
-    {
-      std::vector<float> depths_a;
-      if (!prev.depth.empty()) {
-        depths_a = SampleDepths(prev.depth, camera.depth_scale, prev.features.keypoints,
-                                options_.prediction.depth_sampling);
-      }
-      const MotionRefit refit = RefitMotion(result.imu_motion, result.matches_pass1,
-                                            prev.features.keypoints, features.keypoints, depths_a,
-                                            options_.prediction, undistorter_, options_.refit);
-      if (refit.ok) {
-        refined = refit.motion;
-        fitted = refit.motion.cam_b_from_cam_a;
-      }
+    const MotionRefit refit = RefitMotion(result.imu_motion, result.matches_pass1,
+                                          prev.features.keypoints, features.keypoints, prev.depths,
+                                          options_.prediction, undistorter_, options_.refit);
+    if (refit.ok) {
+      refined = refit.motion;
+      fitted = refit.motion.cam_b_from_cam_a;
     }
     std::vector<KeypointPrediction> predictions2;
     int tracks2 = 0;
@@ -382,11 +373,9 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
       const Eigen::Vector3d xb((ib.x() - camera.cx) / camera.fx, (ib.y() - camera.cy) / camera.fy,
                                1.0);
       double residual = 0.0;
-      const double z = prev.depth.empty() ? std::nan("")
-                                          : SampleDepth(prev.depth, camera.depth_scale, ka.x, ka.y,
-                                                        options_.prediction.depth_sampling);
-      if (result.pose_from_depth && z >= options_.prediction.min_depth &&
-          z <= options_.prediction.max_depth) {
+      const double z =
+          prev.depths.empty() ? std::nan("") : prev.depths[static_cast<size_t>(m.query_idx)];
+      if (result.pose_from_depth && options_.prediction.IsUsableDepth(z)) {
         const Eigen::Vector3d q = rf * (xa * z) + tf;
         residual = f * (q.head<2>() / q.z() - xb.head<2>()).norm();
       } else {

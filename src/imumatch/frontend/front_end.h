@@ -130,6 +130,8 @@ class FrontEnd {
     cv::Mat image, depth;
     Features features;
     std::vector<KeypointInfo> ideal;
+    // Depth at each keypoint (metres, NaN: no reading), sampled once; empty without a depth image.
+    std::vector<float> depths;
     Rigid3d world_from_cam;
   };
   void Initialise(int64_t t_ns, FrontEndResult& result);
