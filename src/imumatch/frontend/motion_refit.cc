@@ -24,9 +24,9 @@ double ChiSquare6Quantile(double p) {
   return 0.5 * (lo + hi);
 }
 
+// The ray of an ideal pixel, at z = 1.
 Eigen::Vector3d Bearing(const PinholeCamera& camera, const Eigen::Vector2d& ideal) {
-  return Eigen::Vector3d((ideal.x() - camera.cx) / camera.fx, (ideal.y() - camera.cy) / camera.fy,
-                         1.0);
+  return camera.IdealToNormalized(ideal).homogeneous();
 }
 
 // The median epipolar distance (ideal px) of the correspondences (bearings in A already rotated
@@ -137,6 +137,7 @@ MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& mat
     Correspondence c;
     c.xa = Bearing(camera, undistorter.ToIdeal(Eigen::Vector2d(ka.x, ka.y)));
     c.xb = Bearing(camera, undistorter.ToIdeal(PositionInB(m, keypoints_b)));
+    if (!c.xa.allFinite() || !c.xb.allFinite()) continue;
     c.z = std::numeric_limits<double>::quiet_NaN();
     if (!depths_a.empty()) {
       const double z = depths_a[static_cast<size_t>(m.query_idx)];
@@ -145,7 +146,6 @@ MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& mat
         ++out.with_depth;
       }
     }
-    if (!c.xa.allFinite() || !c.xb.allFinite()) continue;
     cs.push_back(c);
   }
   out.correspondences = static_cast<int>(cs.size());
@@ -185,57 +185,53 @@ MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& mat
     return d;
   };
 
-  // One correspondence's residual (1 or 2 rows, ideal px) and its Jacobian; false when it has
-  // none (behind camera B, or B's bearing on the epipole).
-  Eigen::Vector2d e;
-  Eigen::Matrix<double, 2, 6> j;
-  auto residual = [&](const Correspondence& c, int& rows) {
+  // One correspondence's residual (ideal px) and its Jacobian; rows 0 when it has none (behind
+  // camera B, or B's bearing on the epipole).
+  struct Row {
+    Eigen::Matrix<double, 2, 6> j;
+    Eigen::Vector2d e;
+    int rows;  // 2: reprojection; 1: epipolar (e[1] and j's second row zero); 0: none
+  };
+  auto residual = [&](const Correspondence& c, Row& row) {
+    row.rows = 0;
     const Eigen::Vector3d ra = r * c.xa;
     if (std::isfinite(c.z)) {
       const Eigen::Vector3d pr = ra * c.z;
       const Eigen::Vector3d q = pr + t;
-      if (!(q.z() > 1e-6)) return false;
-      e = Eigen::Vector2d(f * (q.x() / q.z() - c.xb.x()), f * (q.y() / q.z() - c.xb.y()));
+      if (!(q.z() > 1e-6)) return;
+      row.e = Eigen::Vector2d(f * (q.x() / q.z() - c.xb.x()), f * (q.y() / q.z() - c.xb.y()));
       Eigen::Matrix<double, 2, 3> dpi;
       dpi << f / q.z(), 0.0, -f * q.x() / (q.z() * q.z()), 0.0, f / q.z(),
           -f * q.y() / (q.z() * q.z());
       // dq / d(dtheta) = -Hat(R p), dq / d(dt) = I; a row a of dpi gives -a Hat(p) = -(a x p)^T.
-      j.block<1, 3>(0, 0) = -dpi.row(0).cross(pr.transpose());
-      j.block<1, 3>(1, 0) = -dpi.row(1).cross(pr.transpose());
-      j.rightCols<3>() = dpi;
-      rows = 2;
-      return true;
+      row.j.block<1, 3>(0, 0) = -dpi.row(0).cross(pr.transpose());
+      row.j.block<1, 3>(1, 0) = -dpi.row(1).cross(pr.transpose());
+      row.j.rightCols<3>() = dpi;
+      row.rows = 2;
+      return;
     }
     // Epipolar line l = t x R x_a in B; e = f (x_b . l) / |(l_x, l_y)|.
     const Eigen::Vector3d l = t.cross(ra);
     const double n = std::sqrt(l.x() * l.x() + l.y() * l.y());
-    if (!(n > 1e-12)) return false;
-    e = Eigen::Vector2d(f * c.xb.dot(l) / n, 0.0);
+    if (!(n > 1e-12)) return;
+    row.e = Eigen::Vector2d(f * c.xb.dot(l) / n, 0.0);
     // de / dl = f / n (x_b - (x_b . l) / n^2 (l_x, l_y, 0)): zero along l, so e does not change
     // with t's length. dl / d(dtheta) = -Hat(t) Hat(R x_a), dl / d(dt) = -Hat(R x_a).
     const Eigen::RowVector3d de_dl =
         (f / n) *
         (c.xb.transpose() - (c.xb.dot(l) / (n * n)) * Eigen::RowVector3d(l.x(), l.y(), 0.0));
     // a Hat(v) = (a x v)^T for a row a: -a Hat(t) Hat(ra) = -((a x t) x ra)^T.
-    j.setZero();
-    j.block<1, 3>(0, 0) = -(de_dl.cross(t.transpose())).cross(ra.transpose());
-    j.block<1, 3>(0, 3) = -de_dl.cross(ra.transpose());
-    rows = 1;
-    return true;
+    row.j.setZero();
+    row.j.block<1, 3>(0, 0) = -(de_dl.cross(t.transpose())).cross(ra.transpose());
+    row.j.block<1, 3>(0, 3) = -de_dl.cross(ra.transpose());
+    row.rows = 1;
   };
 
-  // Per iteration: every residual and Jacobian once, their robust sigma, then the normal
-  // equations of the Cauchy-weighted residuals and the prior.
   // Per iteration: every residual and Jacobian once; while reweighting, their robust sigma and
   // Cauchy weights; then the normal equations of the weighted residuals and the prior.
   // Reweighting every step converges only linearly (about halving the error per step on MH_05),
-  // so the sigma and the weights are frozen after options.reweight_steps steps: Gauss-Newton on
-  // the fixed weighted problem then converges in one or two more.
-  struct Row {
-    Eigen::Matrix<double, 2, 6> j;
-    Eigen::Vector2d e;
-    int rows;  // 2: reprojection; 1: epipolar (e[1] and j's second row zero); 0: none
-  };
+  // so the sigma and the weights are kept once the sigma settles (or after
+  // options.reweight_steps): Gauss-Newton on the fixed weighted problem then converges in a few.
   std::vector<Row> rs(cs.size());
   std::vector<double> weight(cs.size(), 0.0);
   std::vector<double> abs_rows;
@@ -250,12 +246,10 @@ MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& mat
     abs_rows.clear();
     for (size_t i = 0; i < cs.size(); ++i) {
       Row& row = rs[i];
-      row.rows = 0;
-      if (!residual(cs[i], row.rows)) continue;
-      row.j = j;
-      row.e = e;
-      abs_rows.push_back(std::fabs(e[0]));
-      if (row.rows == 2) abs_rows.push_back(std::fabs(e[1]));
+      residual(cs[i], row);
+      if (row.rows == 0) continue;
+      abs_rows.push_back(std::fabs(row.e[0]));
+      if (row.rows == 2) abs_rows.push_back(std::fabs(row.e[1]));
     }
     if (abs_rows.empty()) break;
     bool reweighted = false;
