@@ -431,5 +431,37 @@ TEST(EvalFlightTest, GuidedBeatsBruteForceWithAndWithoutDepth) {
   }
 }
 
+TEST(EvalFlightTest, TheFateOfBruteForcesCorrectMatchesAddsUp) {
+  // Each query has at most one match per method, so brute force's correct matches split into
+  // kept, matched wrong and the not-matched outcomes, and gained - lost is exactly the difference
+  // of the correct counts (an identity between two independent countings of the same runs).
+  const FlightRun& run = FlightImu();
+  for (DetectorKind d : {DetectorKind::kOrb, DetectorKind::kSift}) {
+    SCOPED_TRACE(ToString(d));
+    BruteForceFate total;
+    int bf_correct = 0, guided_correct = 0;
+    for (const auto& r : run.result.records) {
+      if (r.detector != d) continue;
+      for (const auto& mr : r.runs) {
+        const int correct = CountCorrect(mr.residuals, run.threshold_px).correct;
+        if (mr.method == MatchMethod::kGuided) {
+          total.Add(ComputeBruteForceFate(r, mr, run.threshold_px));
+          guided_correct += correct;
+        } else {
+          bf_correct += correct;
+        }
+      }
+    }
+    EXPECT_EQ(total.checked, bf_correct);
+    EXPECT_EQ(total.checked, total.kept + total.matched_wrong + total.refine_dropped +
+                                 total.no_prediction + total.no_candidate + total.inconsistent +
+                                 total.distance + total.ratio + total.mutual);
+    EXPECT_EQ(total.kept + total.gained, guided_correct);
+    // Guided keeps almost all of them (the window recall is >= 0.98) and gains more than it loses.
+    EXPECT_GT(total.kept, 0.97 * total.checked);
+    EXPECT_GT(total.gained, total.checked - total.kept);
+  }
+}
+
 }  // namespace
 }  // namespace imumatch

@@ -255,9 +255,29 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
 
 // For each match of the brute-force run: does the guided search region of its query contain its
 // partner (in ideal pixels)? Also counts why a partner was missed.
+// Also links each brute-force match to this run's match of the same query, and back.
 void CheckWindows(const std::vector<Match>& bf_matches,
                   const std::vector<KeypointPrediction>& predictions,
-                  const std::vector<KeypointInfo>& ideal_b, MethodRun& run) {
+                  const std::vector<KeypointInfo>& ideal_b, const std::vector<Match>& run_matches,
+                  MethodRun& run) {
+  std::vector<int> run_match_of(predictions.size(), -1), bf_match_of(predictions.size(), -1);
+  for (size_t j = 0; j < run_matches.size(); ++j) {
+    run_match_of[static_cast<size_t>(run_matches[j].query_idx)] = static_cast<int>(j);
+  }
+  for (size_t k = 0; k < bf_matches.size(); ++k) {
+    bf_match_of[static_cast<size_t>(bf_matches[k].query_idx)] = static_cast<int>(k);
+  }
+  run.bf_query_match.resize(bf_matches.size());
+  run.bf_query_outcome.resize(bf_matches.size());
+  for (size_t k = 0; k < bf_matches.size(); ++k) {
+    const size_t q = static_cast<size_t>(bf_matches[k].query_idx);
+    run.bf_query_match[k] = run_match_of[q];
+    run.bf_query_outcome[k] = q < run.outcomes.size() ? run.outcomes[q] : QueryOutcome::kMatched;
+  }
+  run.match_bf_match.resize(run_matches.size());
+  for (size_t j = 0; j < run_matches.size(); ++j) {
+    run.match_bf_match[j] = bf_match_of[static_cast<size_t>(run_matches[j].query_idx)];
+  }
   run.bf_partner_in_window.resize(bf_matches.size());
   run.bf_partner_prediction.resize(bf_matches.size());
   run.bf_partner_beyond_segment.assign(bf_matches.size(), 0);
@@ -495,6 +515,7 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
       std::vector<KeypointPrediction> predictions;
       std::vector<Match> bf_matches;  // of the first brute-force run, for the window recall
       std::vector<std::vector<KeypointPrediction>> run_predictions(options.methods.size());
+      std::vector<std::vector<Match>> run_matches(options.methods.size());
       for (size_t m = 0; m < options.methods.size(); ++m) {
         const MatchMethod method = options.methods[m];
         MethodRun run = RunMethod(method, undistorter, motion->motion, ca, cb, item.a, item.b,
@@ -515,12 +536,13 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
           visual.runs.push_back({method, matches, run.residuals, predictions});
         }
         run_predictions[m] = std::move(predictions);
+        if (UsesPrediction(method) && !IsTracking(method)) run_matches[m] = matches;
         rec.runs.push_back(std::move(run));
       }
       if (rec.bf_run >= 0) {
         for (size_t m = 0; m < options.methods.size(); ++m) {
           if (UsesPrediction(options.methods[m]) && !IsTracking(options.methods[m])) {
-            CheckWindows(bf_matches, run_predictions[m], cb.ideal, rec.runs[m]);
+            CheckWindows(bf_matches, run_predictions[m], cb.ideal, run_matches[m], rec.runs[m]);
           }
         }
       }

@@ -70,6 +70,13 @@ struct MethodRun {
   // segment's line but beyond one of its ends (a depth outside the searched range, or a match on
   // the wrong side of the point at infinity), 0 when it is off the line.
   std::vector<uint8_t> bf_partner_beyond_segment;
+  // What became of each brute-force match's query in this run: the index of this run's match of
+  // the same query keypoint (-1: none) and the query's outcome; and, per match of this run, the
+  // index of the brute-force match of its query (-1: brute force did not match it). Guided
+  // methods with a brute-force run in the record (ComputeBruteForceFate in summary.h).
+  std::vector<int> bf_query_match;
+  std::vector<QueryOutcome> bf_query_outcome;
+  std::vector<int> match_bf_match;
 };
 
 // One detector on one frame pair.

@@ -4,6 +4,7 @@
 #include "imumatch/eval/end_to_end.h"
 #include "imumatch/eval/pair_motion.h"
 #include "imumatch/eval/pipelined.h"
+#include "imumatch/eval/report_tables.h"
 #include "imumatch/eval/summary.h"
 #include "imumatch/io/dataset.h"
 #include "imumatch/io/pose_pair.h"
@@ -169,6 +170,49 @@ TEST(EvaluationTest, WindowRecallCountsTheCorrectBruteForcePartnersInside) {
   // The depth split relabels.
   rec.has_depth = true;
   EXPECT_EQ(SplitByDepth({rec})[0].case_name, "c [depth]");
+}
+
+TEST(EvaluationTest, TheFateOfBruteForcesCorrectMatchesInAGuidedRun) {
+  // Hand-built record. Brute force matched queries 0..4 (judged 1, 1, 1, 1 and 6 px); the guided
+  // run matched query 0 correctly (0.5 px), query 1 wrongly (4 px), query 4 correctly (1 px, where
+  // brute force was wrong) and query 5 correctly (brute force had no match); query 2 failed the
+  // ratio test and query 3 was dropped by the refinement (matched, then no match).
+  DetectorPairRecord rec;
+  MethodRun bf;
+  bf.method = MatchMethod::kBruteForce;
+  for (float px : {1.0f, 1.0f, 1.0f, 1.0f, 6.0f})
+    bf.residuals.push_back({ResidualKind::kDepth, px});
+  MethodRun guided;
+  guided.method = MatchMethod::kGuided;
+  guided.residuals = {{ResidualKind::kDepth, 0.5f},
+                      {ResidualKind::kEpipolar, 4.0f},
+                      {ResidualKind::kDepth, 1.0f},
+                      {ResidualKind::kDepth, 1.0f}};
+  guided.bf_query_match = {0, 1, -1, -1, 2};
+  guided.bf_query_outcome = {QueryOutcome::kMatched, QueryOutcome::kMatched,
+                             QueryOutcome::kRatioTest, QueryOutcome::kMatched,
+                             QueryOutcome::kMatched};
+  guided.match_bf_match = {0, 1, 4, -1};
+  rec.runs = {bf, guided};
+  rec.bf_run = 0;
+  const BruteForceFate f = ComputeBruteForceFate(rec, rec.runs[1], 2.0);
+  EXPECT_EQ(f.checked, 4);
+  EXPECT_EQ(f.kept, 1);
+  EXPECT_EQ(f.matched_wrong, 1);
+  EXPECT_EQ(f.ratio, 1);
+  EXPECT_EQ(f.refine_dropped, 1);
+  EXPECT_EQ(f.gained, 2);  // queries 4 and 5
+  // At 8 px brute force's fifth match is correct too, and kept; query 1 is kept as well.
+  const BruteForceFate g = ComputeBruteForceFate(rec, rec.runs[1], 8.0);
+  EXPECT_EQ(g.checked, 5);
+  EXPECT_EQ(g.kept, 3);
+  EXPECT_EQ(g.gained, 1);
+  // The report's table names the counts.
+  rec.case_name = "c";
+  const std::string table = MarkdownBruteForceFateTable({rec}, 2.0);
+  EXPECT_NE(table.find("| c | orb | IMU-guided | 4 | 1 | 1 | 1 / 0 / 0 / 0 / 0 / 0 / 1 | 2 | -1 |"),
+            std::string::npos)
+      << table;
 }
 
 // The TUM pair copied to a temp folder, with its depth or its second pose replaced.

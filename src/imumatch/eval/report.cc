@@ -60,6 +60,16 @@ std::string MarkdownReport(const EvaluationResult& result, const ReportContext& 
       << "Of the brute-force matches judged correct, the share whose partner lies inside the "
          "guided search region.\n\n"
       << MarkdownWindowTable(result.records, context.threshold.threshold_px);
+  const std::string fate =
+      MarkdownBruteForceFateTable(result.records, context.threshold.threshold_px);
+  if (!fate.empty()) {
+    out << "\n## Brute force's correct matches in the guided runs (all pairs)\n\n"
+        << "Of the brute-force matches judged correct: how many the method matched correctly "
+           "too (kept), to a wrong partner, or not at all and why (its query's outcome); gained: "
+           "its correct matches whose query brute force did not match correctly; net = gained - "
+           "(BF correct - kept).\n\n"
+        << fate;
+  }
   const std::string scene_near = MarkdownSceneNearTable(result.records);
   if (!scene_near.empty()) {
     out << "\n## Epipolar segments: near end from the scene\n\n"

@@ -164,6 +164,40 @@ std::string MarkdownWindowTable(const std::vector<DetectorPairRecord>& records,
   return out.str();
 }
 
+std::string MarkdownBruteForceFateTable(const std::vector<DetectorPairRecord>& records,
+                                        double threshold_px) {
+  std::map<std::tuple<std::string, int, int>, BruteForceFate> acc;
+  std::vector<std::string> order;
+  for (const auto& r : records) {
+    if (std::find(order.begin(), order.end(), r.case_name) == order.end())
+      order.push_back(r.case_name);
+    for (const auto& run : r.runs) {
+      if (!UsesPrediction(run.method)) continue;
+      const BruteForceFate f = ComputeBruteForceFate(r, run, threshold_px);
+      if (f.checked == 0 && f.gained == 0) continue;
+      acc[{r.case_name, static_cast<int>(r.detector), static_cast<int>(run.method)}].Add(f);
+    }
+  }
+  if (acc.empty()) return "";
+  std::ostringstream out;
+  out << "| Case | Detector | Method | BF correct | kept | matched wrong | not matched: ratio / "
+         "inconsistent / distance / no candidate / no prediction / mutual / refinement | gained "
+         "| net |\n|---|---|---|---:|---:|---:|---:|---:|---:|\n";
+  for (const auto& c : order) {
+    for (const auto& [key, f] : acc) {
+      if (std::get<0>(key) != c) continue;
+      const int lost = f.checked - f.kept;
+      out << "| " << c << " | " << ToString(static_cast<DetectorKind>(std::get<1>(key))) << " | "
+          << DisplayName(static_cast<MatchMethod>(std::get<2>(key))) << " | " << f.checked << " | "
+          << f.kept << " | " << f.matched_wrong << " | " << f.ratio << " / " << f.inconsistent
+          << " / " << f.distance << " / " << f.no_candidate << " / " << f.no_prediction << " / "
+          << f.mutual << " / " << f.refine_dropped << " | " << f.gained << " | "
+          << (f.gained - lost >= 0 ? "+" : "") << f.gained - lost << " |\n";
+    }
+  }
+  return out.str();
+}
+
 // Where the epipolar segments of keypoints without depth started (PredictKeypointsInScene), per
 // case, detector and method; empty when no pair had keypoints without depth.
 std::string MarkdownSceneNearTable(const std::vector<DetectorPairRecord>& records) {

@@ -23,6 +23,11 @@ std::string MarkdownSpeedupTable(const std::vector<MethodSummary>& summaries);
 // the query was predicted), and the motion's error against the ground truth per case.
 std::string MarkdownWindowTable(const std::vector<DetectorPairRecord>& records,
                                 double threshold_px);
+// Per case, detector and prediction method (summed over pairs): of brute force's correct
+// matches, how many the method kept, matched wrongly or did not match and why; the correct matches
+// it found where brute force had none; the net. Empty without such runs.
+std::string MarkdownBruteForceFateTable(const std::vector<DetectorPairRecord>& records,
+                                        double threshold_px);
 std::string MarkdownMotionErrorTable(const std::vector<DetectorPairRecord>& records);
 // Where the epipolar segments of keypoints without depth started (PredictKeypointsInScene) per
 // case, detector and method: near end min / median / max, pairs whose near end moved, pilot

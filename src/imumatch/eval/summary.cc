@@ -118,6 +118,75 @@ WindowRecall ComputeWindowRecall(const DetectorPairRecord& record, const MethodR
   return w;
 }
 
+void BruteForceFate::Add(const BruteForceFate& other) {
+  checked += other.checked;
+  kept += other.kept;
+  matched_wrong += other.matched_wrong;
+  refine_dropped += other.refine_dropped;
+  no_prediction += other.no_prediction;
+  no_candidate += other.no_candidate;
+  inconsistent += other.inconsistent;
+  distance += other.distance;
+  ratio += other.ratio;
+  mutual += other.mutual;
+  gained += other.gained;
+}
+
+BruteForceFate ComputeBruteForceFate(const DetectorPairRecord& record, const MethodRun& run,
+                                     double threshold_px) {
+  BruteForceFate f;
+  if (record.bf_run < 0 || run.bf_query_match.empty()) return f;
+  const MethodRun& bf = record.runs[static_cast<size_t>(record.bf_run)];
+  if (bf.residuals.size() != run.bf_query_match.size() ||
+      run.match_bf_match.size() != run.residuals.size()) {
+    return f;
+  }
+  const auto correct = [threshold_px](const MatchResidual& r) {
+    return r.kind != ResidualKind::kUnjudgeable && r.residual_px <= threshold_px;
+  };
+  for (size_t k = 0; k < bf.residuals.size(); ++k) {
+    if (!correct(bf.residuals[k])) continue;
+    ++f.checked;
+    const int j = run.bf_query_match[k];
+    if (j >= 0) {
+      ++(correct(run.residuals[static_cast<size_t>(j)]) ? f.kept : f.matched_wrong);
+      continue;
+    }
+    switch (run.bf_query_outcome[k]) {
+      case QueryOutcome::kMatched:
+        ++f.refine_dropped;
+        break;
+      case QueryOutcome::kNoPrediction:
+      case QueryOutcome::kBehindCamera:
+      case QueryOutcome::kOutsideImage:
+        ++f.no_prediction;
+        break;
+      case QueryOutcome::kNoCandidateInWindow:
+        ++f.no_candidate;
+        break;
+      case QueryOutcome::kOrientation:
+      case QueryOutcome::kScale:
+        ++f.inconsistent;
+        break;
+      case QueryOutcome::kDistanceThreshold:
+        ++f.distance;
+        break;
+      case QueryOutcome::kRatioTest:
+        ++f.ratio;
+        break;
+      case QueryOutcome::kMutual:
+        ++f.mutual;
+        break;
+    }
+  }
+  for (size_t j = 0; j < run.residuals.size(); ++j) {
+    if (!correct(run.residuals[j])) continue;
+    const int k = run.match_bf_match[j];
+    if (k < 0 || !correct(bf.residuals[static_cast<size_t>(k)])) ++f.gained;
+  }
+  return f;
+}
+
 std::vector<DetectorPairRecord> SplitByDepth(const std::vector<DetectorPairRecord>& records) {
   std::vector<DetectorPairRecord> out = records;
   for (DetectorPairRecord& r : out) r.case_name += r.has_depth ? " [depth]" : " [no depth]";

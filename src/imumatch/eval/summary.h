@@ -69,6 +69,27 @@ struct WindowRecall {
 WindowRecall ComputeWindowRecall(const DetectorPairRecord& record, const MethodRun& run,
                                  double threshold_px);
 
+// What a guided run made of the queries that brute force matched correctly (at the threshold),
+// and what it found where brute force had no correct match: the net of the two is the run's
+// correct matches minus brute force's. Not matched: the query's outcome in the run.
+struct BruteForceFate {
+  int checked = 0;         // brute-force matches judged correct
+  int kept = 0;            // the run matched the query correctly too (same or another partner)
+  int matched_wrong = 0;   // the run matched the query to a partner judged wrong
+  int refine_dropped = 0;  // matched, then dropped by the sub-pixel refinement
+  int no_prediction = 0;   // behind camera B, outside image B, invalid
+  int no_candidate = 0;    // nothing in the search region
+  int inconsistent = 0;    // orientation or scale inconsistent with the predicted motion
+  int distance = 0;        // best candidate beyond the absolute distance threshold
+  int ratio = 0;           // ratio test against rivals in the search region
+  int mutual = 0;          // not the mutual best
+  int gained = 0;          // correct matches of the run whose query brute force did not match
+                           // correctly
+  void Add(const BruteForceFate& other);
+};
+BruteForceFate ComputeBruteForceFate(const DetectorPairRecord& record, const MethodRun& run,
+                                     double threshold_px);
+
 // The records again, relabelled by whether frame A had depth: case_name + " [depth]" or
 // " [no depth]". Summarize() on them gives the two halves of a sequence that has depth for only
 // some frames (e.g. EuRoC MH_05 excerpt's depth0).
