@@ -221,6 +221,18 @@ TEST(EvalIntegrationTest, WritesReportPlotsAndMatchImages) {
   std::ifstream in(dir + "/report.json");
   const nlohmann::json j = nlohmann::json::parse(in);
   EXPECT_EQ(j["pairs"].size(), 8u * 3u);
+  // Every guided pair says what became of brute force's correct matches, and the counts agree
+  // with the pair's own correct counts (kept + gained = guided correct).
+  int with_fate = 0;
+  for (const auto& p : j["pairs"]) {
+    if (p["method"] != "guided") continue;
+    ASSERT_TRUE(p.contains("bf_correct_fate")) << p.dump();
+    const auto& f = p["bf_correct_fate"];
+    EXPECT_EQ(f["kept"].get<int>() + f["gained"].get<int>(), p["correct"].get<int>()) << p.dump();
+    EXPECT_LE(f["kept"].get<int>() + f["matched_wrong"].get<int>(), f["checked"].get<int>());
+    ++with_fate;
+  }
+  EXPECT_EQ(with_fate, 8);
   const auto plots = WritePerPairPlots(dir, run.result.records, 1.5);
   EXPECT_EQ(plots.size(), 4u);  // time + precision for 2 detectors
   MatchImageOptions mo;

@@ -260,6 +260,20 @@ nlohmann::json ReportToJson(const EvaluationResult& result, const ReportContext&
                                        {"first_window_px", run.first_window_px},
                                        {"window_px", run.window_px}};
       }
+      if (!run.bf_query_match.empty()) {
+        const BruteForceFate f = ComputeBruteForceFate(r, run, thr);
+        pairs.back()["bf_correct_fate"] = {{"checked", f.checked},
+                                           {"kept", f.kept},
+                                           {"matched_wrong", f.matched_wrong},
+                                           {"ratio", f.ratio},
+                                           {"inconsistent", f.inconsistent},
+                                           {"distance", f.distance},
+                                           {"no_candidate", f.no_candidate},
+                                           {"no_prediction", f.no_prediction},
+                                           {"mutual", f.mutual},
+                                           {"refine_dropped", f.refine_dropped},
+                                           {"gained", f.gained}};
+      }
       if (IsTracking(run.method)) {
         const TrackStats& ts = run.track_stats;
         pairs.back()["tracking"] = {{"from_tracks", run.from_tracks},
