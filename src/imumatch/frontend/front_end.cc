@@ -304,8 +304,7 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
     const double z = prev.depths[static_cast<size_t>(m.query_idx)];
     if (!options_.prediction.IsUsableDepth(z)) continue;
     const Eigen::Vector2d ia = undistorter_.ToIdeal(Eigen::Vector2d(ka.x, ka.y));
-    points_a.emplace_back((ia.x() - camera.cx) / camera.fx * z,
-                          (ia.y() - camera.cy) / camera.fy * z, z);
+    points_a.push_back(z * Eigen::Vector3d(camera.IdealToNormalized(ia).homogeneous()));
     pixels_b3.push_back(pb);
     depths_used.push_back(z);
   }
@@ -368,10 +367,8 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
       const Eigen::Vector2d pb = PositionInB(m, features.keypoints);
       const Eigen::Vector2d ia = undistorter_.ToIdeal(Eigen::Vector2d(ka.x, ka.y));
       const Eigen::Vector2d ib = undistorter_.ToIdeal(pb);
-      const Eigen::Vector3d xa((ia.x() - camera.cx) / camera.fx, (ia.y() - camera.cy) / camera.fy,
-                               1.0);
-      const Eigen::Vector3d xb((ib.x() - camera.cx) / camera.fx, (ib.y() - camera.cy) / camera.fy,
-                               1.0);
+      const Eigen::Vector3d xa = camera.IdealToNormalized(ia).homogeneous();
+      const Eigen::Vector3d xb = camera.IdealToNormalized(ib).homogeneous();
       double residual = 0.0;
       const double z =
           prev.depths.empty() ? std::nan("") : prev.depths[static_cast<size_t>(m.query_idx)];

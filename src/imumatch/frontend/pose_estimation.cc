@@ -75,8 +75,7 @@ PoseFit FitPosePnp(const std::vector<Eigen::Vector3d>& points_a,
   for (int i : inliers) {
     fit.inlier_mask[static_cast<size_t>(i)] = 1;
     const Eigen::Vector3d q = fit.cam_b_from_cam_a * points_a[static_cast<size_t>(i)];
-    const Eigen::Vector2d uv(camera.fx * q.x() / q.z() + camera.cx,
-                             camera.fy * q.y() / q.z() + camera.cy);
+    const Eigen::Vector2d uv = camera.NormalizedToIdeal(q.hnormalized());
     sum2 += (uv - Eigen::Vector2d(image[static_cast<size_t>(i)].x, image[static_cast<size_t>(i)].y))
                 .squaredNorm();
   }
@@ -114,10 +113,8 @@ PoseFit FitPoseEpipolar(const std::vector<Eigen::Vector2d>& pixels_a,
   for (size_t i = 0; i < pixels_a.size(); ++i) {
     const Eigen::Vector2d ia = undistorter.ToIdeal(pixels_a[i]);
     const Eigen::Vector2d ib = undistorter.ToIdeal(pixels_b[i]);
-    const Eigen::Vector3d xa((ia.x() - camera.cx) / camera.fx, (ia.y() - camera.cy) / camera.fy,
-                             1.0);
-    xb[i] =
-        Eigen::Vector3d((ib.x() - camera.cx) / camera.fx, (ib.y() - camera.cy) / camera.fy, 1.0);
+    const Eigen::Vector3d xa = camera.IdealToNormalized(ia).homogeneous();
+    xb[i] = camera.IdealToNormalized(ib).homogeneous();
     ra[i] = r * xa;
     n[i] = ra[i].cross(xb[i]);
   }
