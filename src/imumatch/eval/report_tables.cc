@@ -61,6 +61,40 @@ std::string CaseTable(const std::vector<MethodSummary>& summaries, Cell cell) {
   return out.str();
 }
 
+// Accumulators per case, detector and method, for the tables of per-pair run details: cases in
+// the order they first appear, then detector and method enum order.
+template <typename Acc>
+class RunTable {
+ public:
+  Acc& At(const DetectorPairRecord& record, const MethodRun& run) {
+    NoteCase(record);
+    return acc_[{record.case_name, static_cast<int>(record.detector),
+                 static_cast<int>(run.method)}];
+  }
+  // A case keeps its place in the order even without rows.
+  void NoteCase(const DetectorPairRecord& record) {
+    if (std::find(order_.begin(), order_.end(), record.case_name) == order_.end())
+      order_.push_back(record.case_name);
+  }
+  bool empty() const { return acc_.empty(); }
+  // Writes "| case | detector | method | " and then row(out, acc) for every row.
+  template <typename RowFn>
+  void Write(std::ostream& out, RowFn row) const {
+    for (const auto& c : order_) {
+      for (const auto& [key, a] : acc_) {
+        if (std::get<0>(key) != c) continue;
+        out << "| " << c << " | " << ToString(static_cast<DetectorKind>(std::get<1>(key))) << " | "
+            << DisplayName(static_cast<MatchMethod>(std::get<2>(key))) << " | ";
+        row(out, a);
+      }
+    }
+  }
+
+ private:
+  std::map<std::tuple<std::string, int, int>, Acc> acc_;
+  std::vector<std::string> order_;
+};
+
 }  // namespace
 
 std::string FormatFixed(double v, int digits) {
@@ -132,16 +166,14 @@ std::string MarkdownWindowTable(const std::vector<DetectorPairRecord>& records,
     WindowRecall w;
     std::vector<double> per_pair;
   };
-  std::map<std::tuple<std::string, int, int>, Acc> acc;
-  std::vector<std::string> order;
+  RunTable<Acc> table;
   for (const auto& r : records) {
-    if (std::find(order.begin(), order.end(), r.case_name) == order.end())
-      order.push_back(r.case_name);
+    table.NoteCase(r);
     for (const auto& run : r.runs) {
       if (!UsesPrediction(run.method)) continue;
       const WindowRecall w = ComputeWindowRecall(r, run, threshold_px);
       if (w.checked == 0) continue;
-      Acc& a = acc[{r.case_name, static_cast<int>(r.detector), static_cast<int>(run.method)}];
+      Acc& a = table.At(r, run);
       a.w.Add(w);
       a.per_pair.push_back(w.Recall());
     }
@@ -150,51 +182,39 @@ std::string MarkdownWindowTable(const std::vector<DetectorPairRecord>& records,
   out << "| Case | Detector | Method | BF correct checked | pooled | worst pair | missed: with "
          "depth / epipolar (beyond its ends) / no prediction "
          "|\n|---|---|---|---:|---:|---:|---:|\n";
-  for (const auto& c : order) {
-    for (const auto& [key, a] : acc) {
-      if (std::get<0>(key) != c) continue;
-      out << "| " << c << " | " << ToString(static_cast<DetectorKind>(std::get<1>(key))) << " | "
-          << DisplayName(static_cast<MatchMethod>(std::get<2>(key))) << " | " << a.w.checked
-          << " | " << FormatFixed(a.w.Recall(), 4) << " | "
-          << FormatFixed(*std::min_element(a.per_pair.begin(), a.per_pair.end()), 3) << " | "
-          << a.w.missed_with_depth << " / " << a.w.missed_without_depth << " ("
-          << a.w.missed_beyond_segment << ") / " << a.w.missed_no_prediction << " |\n";
-    }
-  }
+  table.Write(out, [](std::ostream& o, const Acc& a) {
+    o << a.w.checked << " | " << FormatFixed(a.w.Recall(), 4) << " | "
+      << FormatFixed(*std::min_element(a.per_pair.begin(), a.per_pair.end()), 3) << " | "
+      << a.w.missed_with_depth << " / " << a.w.missed_without_depth << " ("
+      << a.w.missed_beyond_segment << ") / " << a.w.missed_no_prediction << " |\n";
+  });
   return out.str();
 }
 
 std::string MarkdownBruteForceFateTable(const std::vector<DetectorPairRecord>& records,
                                         double threshold_px) {
-  std::map<std::tuple<std::string, int, int>, BruteForceFate> acc;
-  std::vector<std::string> order;
+  RunTable<BruteForceFate> table;
   for (const auto& r : records) {
-    if (std::find(order.begin(), order.end(), r.case_name) == order.end())
-      order.push_back(r.case_name);
+    table.NoteCase(r);
     for (const auto& run : r.runs) {
       if (!UsesPrediction(run.method)) continue;
       const BruteForceFate f = ComputeBruteForceFate(r, run, threshold_px);
       if (f.checked == 0 && f.gained == 0) continue;
-      acc[{r.case_name, static_cast<int>(r.detector), static_cast<int>(run.method)}].Add(f);
+      table.At(r, run).Add(f);
     }
   }
-  if (acc.empty()) return "";
+  if (table.empty()) return "";
   std::ostringstream out;
   out << "| Case | Detector | Method | BF correct | kept | matched wrong | not matched: ratio / "
          "inconsistent / distance / no candidate / no prediction / mutual / refinement | gained "
          "| net |\n|---|---|---|---:|---:|---:|---:|---:|---:|\n";
-  for (const auto& c : order) {
-    for (const auto& [key, f] : acc) {
-      if (std::get<0>(key) != c) continue;
-      const int lost = f.checked - f.kept;
-      out << "| " << c << " | " << ToString(static_cast<DetectorKind>(std::get<1>(key))) << " | "
-          << DisplayName(static_cast<MatchMethod>(std::get<2>(key))) << " | " << f.checked << " | "
-          << f.kept << " | " << f.matched_wrong << " | " << f.ratio << " / " << f.inconsistent
-          << " / " << f.distance << " / " << f.no_candidate << " / " << f.no_prediction << " / "
-          << f.mutual << " / " << f.refine_dropped << " | " << f.gained << " | "
-          << (f.gained - lost >= 0 ? "+" : "") << f.gained - lost << " |\n";
-    }
-  }
+  table.Write(out, [](std::ostream& o, const BruteForceFate& f) {
+    const int net = f.gained - (f.checked - f.kept);
+    o << f.checked << " | " << f.kept << " | " << f.matched_wrong << " | " << f.ratio << " / "
+      << f.inconsistent << " / " << f.distance << " / " << f.no_candidate << " / "
+      << f.no_prediction << " / " << f.mutual << " / " << f.refine_dropped << " | " << f.gained
+      << " | " << (net >= 0 ? "+" : "") << net << " |\n";
+  });
   return out.str();
 }
 
@@ -206,36 +226,28 @@ std::string MarkdownSceneNearTable(const std::vector<DetectorPairRecord>& record
     double pilot_matches = 0.0;
     int moved = 0;
   };
-  std::map<std::tuple<std::string, int, int>, Acc> acc;
-  std::vector<std::string> order;
+  RunTable<Acc> table;
   for (const auto& r : records) {
     for (const auto& run : r.runs) {
       if (run.stats.predicted_without_depth == 0) continue;
-      if (std::find(order.begin(), order.end(), r.case_name) == order.end())
-        order.push_back(r.case_name);
-      Acc& a = acc[{r.case_name, static_cast<int>(r.detector), static_cast<int>(run.method)}];
+      Acc& a = table.At(r, run);
       a.near.push_back(run.scene_near.segment_min_depth_m);
       a.pilot_matches += run.scene_near.pilot_matches;
       a.moved += run.scene_near.moved ? 1 : 0;
     }
   }
-  if (acc.empty()) return "";
+  if (table.empty()) return "";
   std::ostringstream out;
   out << "| Case | Detector | Method | pairs | near end m: min / median / max | pairs moved | "
          "pilot matches (mean) |\n|---|---|---|---:|---:|---:|---:|\n";
-  for (const auto& c : order) {
-    for (const auto& [key, a] : acc) {
-      if (std::get<0>(key) != c) continue;
-      const StageStats st = ComputeStageStats(a.near);
-      const double pairs = static_cast<double>(a.near.size());
-      out << "| " << c << " | " << ToString(static_cast<DetectorKind>(std::get<1>(key))) << " | "
-          << DisplayName(static_cast<MatchMethod>(std::get<2>(key))) << " | " << a.near.size()
-          << " | " << FormatFixed(*std::min_element(a.near.begin(), a.near.end()), 2) << " / "
-          << FormatFixed(st.p50, 2) << " / "
-          << FormatFixed(*std::max_element(a.near.begin(), a.near.end()), 2) << " | " << a.moved
-          << " | " << FormatFixed(a.pilot_matches / pairs, 1) << " |\n";
-    }
-  }
+  table.Write(out, [](std::ostream& o, const Acc& a) {
+    const StageStats st = ComputeStageStats(a.near);
+    const double pairs = static_cast<double>(a.near.size());
+    o << a.near.size() << " | " << FormatFixed(*std::min_element(a.near.begin(), a.near.end()), 2)
+      << " / " << FormatFixed(st.p50, 2) << " / "
+      << FormatFixed(*std::max_element(a.near.begin(), a.near.end()), 2) << " | " << a.moved
+      << " | " << FormatFixed(a.pilot_matches / pairs, 1) << " |\n";
+  });
   return out.str();
 }
 
@@ -246,14 +258,11 @@ std::string MarkdownSecondPassTable(const std::vector<DetectorPairRecord>& recor
     int tried = 0, ran = 0, disagreed = 0, not_tighter = 0, no_fit = 0;
     std::vector<double> sigma, first_window, window;
   };
-  std::map<std::tuple<std::string, int, int>, Acc> acc;
-  std::vector<std::string> order;
+  RunTable<Acc> table;
   for (const auto& r : records) {
     for (const auto& run : r.runs) {
       if (run.second_pass == SecondPassOutcome::kNotTried) continue;
-      if (std::find(order.begin(), order.end(), r.case_name) == order.end())
-        order.push_back(r.case_name);
-      Acc& a = acc[{r.case_name, static_cast<int>(r.detector), static_cast<int>(run.method)}];
+      Acc& a = table.At(r, run);
       ++a.tried;
       a.first_window.push_back(run.first_window_px);
       a.window.push_back(run.window_px);
@@ -264,29 +273,25 @@ std::string MarkdownSecondPassTable(const std::vector<DetectorPairRecord>& recor
       a.no_fit += run.second_pass == SecondPassOutcome::kNoFit ? 1 : 0;
     }
   }
-  if (acc.empty()) return "";
+  if (table.empty()) return "";
   std::ostringstream out;
   out << "| Case | Detector | Method | pairs | second pass ran | first pass kept: fit disagreed "
          "with the IMU / windows not smaller / no fit (residuals beyond the keypoints' noise, too "
          "few) | fit residual sigma px: median / max | "
          "window half size px: first pass -> final (median) |\n"
          "|---|---|---|---:|---:|---:|---:|---:|\n";
-  for (const auto& c : order) {
-    for (const auto& [key, a] : acc) {
-      if (std::get<0>(key) != c) continue;
-      out << "| " << c << " | " << ToString(static_cast<DetectorKind>(std::get<1>(key))) << " | "
-          << DisplayName(static_cast<MatchMethod>(std::get<2>(key))) << " | " << a.tried << " | "
-          << a.ran << " | " << a.disagreed << " / " << a.not_tighter << " / " << a.no_fit << " | ";
-      if (a.sigma.empty()) {
-        out << "- | ";
-      } else {
-        out << FormatFixed(ComputeStageStats(a.sigma).p50, 2) << " / "
-            << FormatFixed(*std::max_element(a.sigma.begin(), a.sigma.end()), 2) << " | ";
-      }
-      out << FormatFixed(ComputeStageStats(a.first_window).p50, 1) << " -> "
-          << FormatFixed(ComputeStageStats(a.window).p50, 1) << " |\n";
+  table.Write(out, [](std::ostream& o, const Acc& a) {
+    o << a.tried << " | " << a.ran << " | " << a.disagreed << " / " << a.not_tighter << " / "
+      << a.no_fit << " | ";
+    if (a.sigma.empty()) {
+      o << "- | ";
+    } else {
+      o << FormatFixed(ComputeStageStats(a.sigma).p50, 2) << " / "
+        << FormatFixed(*std::max_element(a.sigma.begin(), a.sigma.end()), 2) << " | ";
     }
-  }
+    o << FormatFixed(ComputeStageStats(a.first_window).p50, 1) << " -> "
+      << FormatFixed(ComputeStageStats(a.window).p50, 1) << " |\n";
+  });
   return out.str();
 }
 
