@@ -121,8 +121,37 @@ py::object Evaluate(EvalSource source, const std::vector<std::string>& detectors
     d["reason"] = s.reason;
     skipped.append(d);
   }
+  // What each prediction method made of brute force's correct matches, summed over the pairs.
+  py::list fates;
+  for (const MethodSummary& s : summary) {
+    if (!UsesPrediction(s.method) || IsTracking(s.method)) continue;  // no per-query outcomes
+    BruteForceFate f;
+    for (const DetectorPairRecord& r : result.records) {
+      if (r.case_name != s.case_name || r.detector != s.detector) continue;
+      for (const MethodRun& run : r.runs) {
+        if (run.method == s.method) f.Add(ComputeBruteForceFate(r, run, threshold.threshold_px));
+      }
+    }
+    py::dict d;
+    d["case"] = s.case_name;
+    d["detector"] = ToString(s.detector);
+    d["method"] = ToString(s.method);
+    d["checked"] = f.checked;
+    d["kept"] = f.kept;
+    d["matched_wrong"] = f.matched_wrong;
+    d["ratio"] = f.ratio;
+    d["inconsistent"] = f.inconsistent;
+    d["distance"] = f.distance;
+    d["no_candidate"] = f.no_candidate;
+    d["no_prediction"] = f.no_prediction;
+    d["mutual"] = f.mutual;
+    d["refine_dropped"] = f.refine_dropped;
+    d["gained"] = f.gained;
+    fates.append(d);
+  }
   py::dict out;
   out["rows"] = rows;
+  out["bf_correct_fate"] = fates;
   out["threshold"] = threshold.description;
   out["threshold_px"] = threshold.threshold_px;
   out["notes"] = notes;
@@ -314,7 +343,10 @@ truth is exact. Rendering costs ~0.1 s per 640 x 480 frame.)");
       R"(Compares IMU-guided and brute-force matching on a dataset (a path, a Dataset or a
 SyntheticSequence), judged by its ground truth, as `imumatch eval` does. Returns the summary: one
 dict per case, detector and method (matches, correct, false, precision, recall, window_recall,
-times in ms, threshold_px). details=True returns {'rows', 'threshold', 'notes', 'skipped', ...}.
+times in ms, threshold_px). details=True returns {'rows', 'threshold', 'notes', 'skipped',
+'bf_correct_fate', ...}; bf_correct_fate: per prediction method, summed over the pairs, what it
+made of brute force's correct matches (kept, matched_wrong, not matched by reason) and the
+correct matches it gained where brute force had none.
 second_pass=False: the guided method matches once, in the IMU's windows (`--single-pass`).)");
 }
 

@@ -66,6 +66,13 @@ def test_evaluate_a_synthetic_sequence_in_memory():
     assert guided["method"] == "guided" and guided["pairs"] == 2
     assert guided["precision"] > 0.95 and guided["correct"] >= bf["correct"]
     assert "front1m" in imumatch.motion_names()
+    # One match per query and method: kept + gained is guided's correct count and the brute-force
+    # correct matches checked are brute force's, over both pairs.
+    (fate,) = out["bf_correct_fate"]
+    assert fate["method"] == "guided" and fate["detector"] == "orb"
+    assert fate["checked"] == round(bf["correct"] * bf["pairs"])
+    assert fate["kept"] + fate["gained"] == round(guided["correct"] * guided["pairs"])
+    assert fate["kept"] + fate["matched_wrong"] <= fate["checked"]
 
 
 def test_tum_trajectory_reader(tmp_path):
