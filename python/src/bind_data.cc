@@ -136,17 +136,7 @@ py::object Evaluate(EvalSource source, const std::vector<std::string>& detectors
     d["case"] = s.case_name;
     d["detector"] = ToString(s.detector);
     d["method"] = ToString(s.method);
-    d["checked"] = f.checked;
-    d["kept"] = f.kept;
-    d["matched_wrong"] = f.matched_wrong;
-    d["ratio"] = f.ratio;
-    d["inconsistent"] = f.inconsistent;
-    d["distance"] = f.distance;
-    d["no_candidate"] = f.no_candidate;
-    d["no_prediction"] = f.no_prediction;
-    d["mutual"] = f.mutual;
-    d["refine_dropped"] = f.refine_dropped;
-    d["gained"] = f.gained;
+    for (const auto& [name, count] : f.Named()) d[name] = count;
     fates.append(d);
   }
   py::dict out;

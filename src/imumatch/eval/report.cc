@@ -262,17 +262,9 @@ nlohmann::json ReportToJson(const EvaluationResult& result, const ReportContext&
       }
       if (!run.bf_query_match.empty()) {
         const BruteForceFate f = ComputeBruteForceFate(r, run, thr);
-        pairs.back()["bf_correct_fate"] = {{"checked", f.checked},
-                                           {"kept", f.kept},
-                                           {"matched_wrong", f.matched_wrong},
-                                           {"ratio", f.ratio},
-                                           {"inconsistent", f.inconsistent},
-                                           {"distance", f.distance},
-                                           {"no_candidate", f.no_candidate},
-                                           {"no_prediction", f.no_prediction},
-                                           {"mutual", f.mutual},
-                                           {"refine_dropped", f.refine_dropped},
-                                           {"gained", f.gained}};
+        json fate = json::object();
+        for (const auto& [name, count] : f.Named()) fate[name] = count;
+        pairs.back()["bf_correct_fate"] = fate;
       }
       if (IsTracking(run.method)) {
         const TrackStats& ts = run.track_stats;

@@ -132,6 +132,20 @@ void BruteForceFate::Add(const BruteForceFate& other) {
   gained += other.gained;
 }
 
+std::vector<std::pair<const char*, int>> BruteForceFate::Named() const {
+  return {{"checked", checked},
+          {"kept", kept},
+          {"matched_wrong", matched_wrong},
+          {"refine_dropped", refine_dropped},
+          {"no_prediction", no_prediction},
+          {"no_candidate", no_candidate},
+          {"inconsistent", inconsistent},
+          {"distance", distance},
+          {"ratio", ratio},
+          {"mutual", mutual},
+          {"gained", gained}};
+}
+
 BruteForceFate ComputeBruteForceFate(const DetectorPairRecord& record, const MethodRun& run,
                                      double threshold_px) {
   BruteForceFate f;

@@ -2,6 +2,7 @@
 
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "imumatch/eval/evaluation.h"
@@ -86,6 +87,8 @@ struct BruteForceFate {
   int gained = 0;          // correct matches of the run whose query brute force did not match
                            // correctly
   void Add(const BruteForceFate& other);
+  // The counts by name (as report.json and Python's evaluate name them), in the order above.
+  std::vector<std::pair<const char*, int>> Named() const;
 };
 BruteForceFate ComputeBruteForceFate(const DetectorPairRecord& record, const MethodRun& run,
                                      double threshold_px);
