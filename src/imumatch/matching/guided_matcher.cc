@@ -182,7 +182,8 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
       m > 0 ? SelectCostGatherFunction(norm, bytes) : nullptr;
   std::vector<int>& kept_slot = scratch->kept_slot;
   std::vector<uint8_t>& kept_consistent = scratch->kept_consistent;
-  std::vector<float>& kept_cost = scratch->kept_cost;
+  std::vector<int>&consistent_slot = scratch->consistent_slot, &rival_slot = scratch->rival_slot;
+  std::vector<float>&consistent_cost = scratch->consistent_cost, &rival_cost = scratch->rival_cost;
   const int rivals_all_bit = rivals_all ? 1 : 0;
   const bool dedup = options.duplicate_radius_px > 0.0;
   const float dup_radius = static_cast<float>(options.duplicate_radius_px);
@@ -292,7 +293,10 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
         const size_t size = 2 * static_cast<size_t>(kept + len);
         kept_slot.resize(size);
         kept_consistent.resize(size);
-        kept_cost.resize(size);
+        consistent_slot.resize(size);
+        rival_slot.resize(size);
+        consistent_cost.resize(size);
+        rival_cost.resize(size);
       }
       const int any =
           capsule ? TestRun<true>(test, cand_b.data(), begin, end, lo_x, hi_x, lo_y, hi_y,
@@ -309,56 +313,63 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
     } else {
       grid_b.ForEachRunInBox(p.min_x, p.min_y, p.max_x, p.max_y, run);
     }
-    // Pass 2: the descriptor costs of the kept candidates, in one call.
-    if (kept > 0) cost_gather(da, desc_b.data(), kept_slot.data(), kept, bytes, kept_cost.data());
-    const int64_t evaluated = kept;
-    // Pass 3: the best consistent candidate (the first of equal costs, in grid order), and the
-    // reverse bests of the mutual check over the consistent candidates.
+    // Pass 2: the kept candidates split into the consistent ones (possible matches) and the
+    // inconsistent ones (rivals only), in grid order, without a branch per candidate.
+    int nc = 0, ni = 0;
+    for (int j = 0; j < kept; ++j) {
+      const int k = kept_slot[j];
+      const int c = kept_consistent[j];
+      consistent_slot[nc] = k;
+      rival_slot[ni] = k;
+      nc += c;
+      ni += c ^ 1;
+    }
+    // Pass 3: the consistent candidates' costs in one call, the best of them (the first of equal
+    // costs, in grid order), and the reverse bests of the mutual check.
+    if (nc > 0) {
+      cost_gather(da, desc_b.data(), consistent_slot.data(), nc, bytes, consistent_cost.data());
+    }
+    stats.distances_computed += nc;
     float best = inf;
     int best_j = -1;
-    for (int j = 0; j < kept; ++j) {
-      const float c = kept_consistent[j] ? kept_cost[j] : inf;
+    for (int j = 0; j < nc; ++j) {
+      const float c = consistent_cost[j];
       best_j = c < best ? j : best_j;
       best = std::min(best, c);
     }
     if (mutual) {
-      for (int j = 0; j < kept; ++j) {
-        const int k = kept_slot[j];
-        const float c = kept_cost[j];
-        if (kept_consistent[j] &&
-            (c < reverse_cost[k] || (c == reverse_cost[k] && i < reverse_idx[k]))) {
+      for (int j = 0; j < nc; ++j) {
+        const int k = consistent_slot[j];
+        const float c = consistent_cost[j];
+        if (c < reverse_cost[k] || (c == reverse_cost[k] && i < reverse_idx[k])) {
           reverse_cost[k] = c;
           reverse_idx[k] = i;
         }
       }
     }
-    const int best_k = best_j >= 0 ? kept_slot[best_j] : -1;
-    // Pass 4: the runner-up (consistent) and the best rival (inconsistent) other than the best.
-    // Rivals at the best candidate's own place are the same feature detected twice (another
-    // pyramid level, another orientation): they do not make the match ambiguous.
-    float second = inf, rival = inf;
+    const int best_k = best_j >= 0 ? consistent_slot[best_j] : -1;
+    // Pass 4: the runner-up among the consistent candidates other than the best. Candidates at
+    // the best candidate's own place are the same feature detected twice (another pyramid level,
+    // another orientation): they do not make the match ambiguous.
+    float second = inf, dup2 = -1.0f, bx = 0.0f, by = 0.0f;  // dup2 < 0: no duplicates
     if (best_j >= 0) {
       const float best_size = cand_b[best_k].size;
-      float dup2 = -1.0f;  // no candidate is a duplicate
       if (dedup) {
         const float scale =
             ref_b > 0.0f && best_size > 0.0f ? std::max(1.0f, best_size / ref_b) : 1.0f;
         dup2 = dup_radius * dup_radius * scale * scale;
       }
-      const float bx = cand_b[best_k].x, by = cand_b[best_k].y;
+      bx = cand_b[best_k].x;
+      by = cand_b[best_k].y;
       // Without a branch per candidate (their outcomes are data, and mispredicted branches here
-      // cost more than the arithmetic once windows hold a dozen candidates): a skipped candidate's
-      // cost becomes +inf, and each accumulator sees +inf for the candidates of the other kind.
-      for (int j = 0; j < kept; ++j) {
-        const float dx = cand_b[kept_slot[j]].x - bx, dy = cand_b[kept_slot[j]].y - by;
+      // cost more than the arithmetic once windows hold a dozen candidates): a skipped
+      // candidate's cost becomes +inf.
+      for (int j = 0; j < nc; ++j) {
+        const float dx = cand_b[consistent_slot[j]].x - bx, dy = cand_b[consistent_slot[j]].y - by;
         const int skip = (j == best_j) | static_cast<int>(dx * dx + dy * dy <= dup2);
-        const int consistent = kept_consistent[j];
-        const float c = kept_cost[j] + InfIf(skip);
-        second = std::min(second, c + InfIf(consistent ^ 1));
-        rival = std::min(rival, c + InfIf(consistent));
+        second = std::min(second, consistent_cost[j] + InfIf(skip));
       }
     }
-    stats.distances_computed += evaluated;
     if (!any_in_window) {
       ++stats.no_candidate_in_window;
       result.outcomes[i] = QueryOutcome::kNoCandidateInWindow;
@@ -387,10 +398,33 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
       result.outcomes[i] = QueryOutcome::kDistanceThreshold;
       continue;
     }
-    if (use_ratio && !(best < ratio_cost * std::min({second, rival, max_cost}))) {
-      ++stats.ratio_test;
-      result.outcomes[i] = QueryOutcome::kRatioTest;
-      continue;
+    if (use_ratio) {
+      // The inconsistent candidates (other than the best one's duplicates) are rivals too, as
+      // every keypoint is in a brute-force ratio test. Their costs are computed only when they
+      // decide: when the best passes the ratio against the runner-up and the threshold. The
+      // outcome is that of best < ratio * min(second, rival, threshold) either way.
+      bool distinctive = best < ratio_cost * std::min(second, max_cost);
+      if (distinctive && ni > 0) {
+        int nr = 0;
+        for (int j = 0; j < ni; ++j) {
+          const int k = rival_slot[j];
+          const float dx = cand_b[k].x - bx, dy = cand_b[k].y - by;
+          rival_slot[nr] = k;
+          nr += static_cast<int>(dx * dx + dy * dy > dup2);
+        }
+        if (nr > 0) {
+          cost_gather(da, desc_b.data(), rival_slot.data(), nr, bytes, rival_cost.data());
+          stats.distances_computed += nr;
+          float rival = inf;
+          for (int j = 0; j < nr; ++j) rival = std::min(rival, rival_cost[j]);
+          distinctive = best < ratio_cost * std::min({second, rival, max_cost});
+        }
+      }
+      if (!distinctive) {
+        ++stats.ratio_test;
+        result.outcomes[i] = QueryOutcome::kRatioTest;
+        continue;
+      }
     }
     accepted_slot[q] = best_k;
     accepted_cost[q] = best;

@@ -81,7 +81,8 @@ struct GuidedSearchScratch {
   std::vector<int> reverse_idx;
   std::vector<int> kept_slot;
   std::vector<uint8_t> kept_consistent;
-  std::vector<float> kept_cost;
+  std::vector<int> consistent_slot, rival_slot;
+  std::vector<float> consistent_cost, rival_cost;
   std::vector<int> order, position_of, cell_start, cell;
   std::vector<int> accepted_slot;
   std::vector<float> accepted_cost, accepted_second;
