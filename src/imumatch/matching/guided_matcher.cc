@@ -57,19 +57,21 @@ struct CandidateTest {
   float start_x, start_y, dx, dy, r2;  // the capsule's segment and squared radius
 };
 
-// Tests a run of candidates (slots begin..end-1 of arrays in slot order) and appends those to be
-// compared to kept_slot / kept_consistent (capacity for end - begin more). No branch per
-// candidate (about half of them fail the box test; a branch would mispredict a lot). Returns flags
-// of the run: bit 0 some candidate inside the window, bit 1 some inside with a consistent angle.
-// Angles are in [0, 360) or -1 (no angle), sizes > 0 or 0 (no size).
+// Tests a run of candidates (slots begin..end-1 of arrays in slot order) and appends the slots
+// inside the window to consistent_slot (consistent with the prediction: possible matches) or, when
+// keep_inconsistent, to rival_slot (rivals in the ratio test only), each in slot order (capacity
+// for end - begin more in each). No branch per candidate (about half of them fail the box test; a
+// branch would mispredict a lot). Returns flags of the run: bit 0 some candidate inside the
+// window, bit 1 some inside with a consistent angle. Angles are in [0, 360) or -1 (no angle),
+// sizes > 0 or 0 (no size).
 template <bool kCapsule>
 int TestRun(const CandidateTest& t, const GuidedSearchScratch::Candidate* b, int begin, int end,
-            float lo_x, float hi_x, float lo_y, float hi_y, int keep_inconsistent, int* kept_slot,
-            uint8_t* kept_consistent, int* kept) {
+            float lo_x, float hi_x, float lo_y, float hi_y, int keep_inconsistent,
+            int* consistent_slot, int* num_consistent, int* rival_slot, int* num_rivals) {
   const float len2 = t.dx * t.dx + t.dy * t.dy;
   const float denominator = len2 > 0.0f ? len2 : 1.0f;  // a point segment: dot = 0, s = 0
   const int no_angle_check = !t.check_angle, no_size_check = !t.check_size;
-  int n = *kept, any = 0;
+  int nc = *num_consistent, ni = *num_rivals, any = 0;
   for (int k = begin; k < end; ++k) {
     const float x = b[k].x, y = b[k].y;
     int in = (x >= lo_x) & (x <= hi_x) & (y >= lo_y) & (y <= hi_y);
@@ -88,11 +90,13 @@ int TestRun(const CandidateTest& t, const GuidedSearchScratch::Candidate* b, int
         no_size_check | (size <= 0.0f) | ((size >= t.size_lo) & (size <= t.size_hi));
     const int consistent = angle_ok & size_ok;
     any |= in | ((in & angle_ok) << 1);
-    kept_slot[n] = k;
-    kept_consistent[n] = static_cast<uint8_t>(consistent);
-    n += in & (consistent | keep_inconsistent);
+    consistent_slot[nc] = k;
+    rival_slot[ni] = k;
+    nc += in & consistent;
+    ni += in & (consistent ^ 1) & keep_inconsistent;
   }
-  *kept = n;
+  *num_consistent = nc;
+  *num_rivals = ni;
   return any;
 }
 
@@ -180,8 +184,6 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
   }
   const DescriptorCostGatherFn cost_gather =
       m > 0 ? SelectCostGatherFunction(norm, bytes) : nullptr;
-  std::vector<int>& kept_slot = scratch->kept_slot;
-  std::vector<uint8_t>& kept_consistent = scratch->kept_consistent;
   std::vector<int>&consistent_slot = scratch->consistent_slot, &rival_slot = scratch->rival_slot;
   std::vector<float>&consistent_cost = scratch->consistent_cost, &rival_cost = scratch->rival_cost;
   const int rivals_all_bit = rivals_all ? 1 : 0;
@@ -270,11 +272,11 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
     const float size_hi = check_size ? ka.size * p.scale_max * scale_tol : 0.0f;
     const float r2 = p.radius * p.radius;
 
-    // Pass 1: the candidates inside the window, with their consistency with the predicted
-    // rotation and scale; those that will be compared are packed into kept_* (each run of slots the
-    // window spans in a cell row, tested without a branch per candidate).
+    // Pass 1: the candidates inside the window, split by their consistency with the predicted
+    // rotation and scale into consistent_slot and rival_slot, each in grid order (each run of
+    // slots the window spans in a cell row, tested without a branch per candidate).
     bool any_in_window = false, any_angle_ok = false;
-    int kept = 0;
+    int nc = 0, ni = 0;
     const CandidateTest test{expected_angle,
                              orient_tol,
                              size_lo,
@@ -289,20 +291,19 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
     const auto run = [&](int begin, int end, float lo_x, float hi_x, float lo_y, float hi_y) {
       const int len = end - begin;
       stats.points_scanned += len;
-      if (kept_slot.size() < static_cast<size_t>(kept + len)) {
-        const size_t size = 2 * static_cast<size_t>(kept + len);
-        kept_slot.resize(size);
-        kept_consistent.resize(size);
+      if (consistent_slot.size() < static_cast<size_t>(std::max(nc, ni) + len)) {
+        const size_t size = 2 * static_cast<size_t>(std::max(nc, ni) + len);
         consistent_slot.resize(size);
         rival_slot.resize(size);
         consistent_cost.resize(size);
         rival_cost.resize(size);
       }
       const int any =
-          capsule ? TestRun<true>(test, cand_b.data(), begin, end, lo_x, hi_x, lo_y, hi_y,
-                                  rivals_all_bit, kept_slot.data(), kept_consistent.data(), &kept)
-                  : TestRun<false>(test, cand_b.data(), begin, end, lo_x, hi_x, lo_y, hi_y,
-                                   rivals_all_bit, kept_slot.data(), kept_consistent.data(), &kept);
+          capsule
+              ? TestRun<true>(test, cand_b.data(), begin, end, lo_x, hi_x, lo_y, hi_y,
+                              rivals_all_bit, consistent_slot.data(), &nc, rival_slot.data(), &ni)
+              : TestRun<false>(test, cand_b.data(), begin, end, lo_x, hi_x, lo_y, hi_y,
+                               rivals_all_bit, consistent_slot.data(), &nc, rival_slot.data(), &ni);
       any_in_window |= (any & 1) != 0;
       any_angle_ok |= (any & 2) != 0;
     };
@@ -313,18 +314,7 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
     } else {
       grid_b.ForEachRunInBox(p.min_x, p.min_y, p.max_x, p.max_y, run);
     }
-    // Pass 2: the kept candidates split into the consistent ones (possible matches) and the
-    // inconsistent ones (rivals only), in grid order, without a branch per candidate.
-    int nc = 0, ni = 0;
-    for (int j = 0; j < kept; ++j) {
-      const int k = kept_slot[j];
-      const int c = kept_consistent[j];
-      consistent_slot[nc] = k;
-      rival_slot[ni] = k;
-      nc += c;
-      ni += c ^ 1;
-    }
-    // Pass 3: the consistent candidates' costs in one call, the best of them (the first of equal
+    // Pass 2: the consistent candidates' costs in one call, the best of them (the first of equal
     // costs, in grid order), and the reverse bests of the mutual check.
     if (nc > 0) {
       cost_gather(da, desc_b.data(), consistent_slot.data(), nc, bytes, consistent_cost.data());
@@ -348,7 +338,7 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
       }
     }
     const int best_k = best_j >= 0 ? consistent_slot[best_j] : -1;
-    // Pass 4: the runner-up among the consistent candidates other than the best. Candidates at
+    // Pass 3: the runner-up among the consistent candidates other than the best. Candidates at
     // the best candidate's own place are the same feature detected twice (another pyramid level,
     // another orientation): they do not make the match ambiguous.
     float second = inf, dup2 = -1.0f, bx = 0.0f, by = 0.0f;  // dup2 < 0: no duplicates

@@ -79,8 +79,6 @@ struct GuidedSearchScratch {
   std::vector<uint8_t> desc_b;
   std::vector<float> reverse_cost;
   std::vector<int> reverse_idx;
-  std::vector<int> kept_slot;
-  std::vector<uint8_t> kept_consistent;
   std::vector<int> consistent_slot, rival_slot;
   std::vector<float> consistent_cost, rival_cost;
   std::vector<int> order, position_of, cell_start, cell;
