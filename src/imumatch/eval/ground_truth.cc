@@ -181,7 +181,7 @@ JudgedCounts CountCorrect(const std::vector<MatchResidual>& residuals, double th
   JudgedCounts c;
   c.matches = static_cast<int>(residuals.size());
   for (const MatchResidual& r : residuals) {
-    const bool ok = r.kind != ResidualKind::kUnjudgeable && r.residual_px <= threshold_px;
+    const bool ok = r.CorrectAt(threshold_px);
     if (ok) ++c.correct;
     if (r.kind == ResidualKind::kDepth) {
       ++c.judged_by_depth;

@@ -32,6 +32,11 @@ enum class ResidualKind : uint8_t { kDepth, kEpipolar, kUnjudgeable };
 struct MatchResidual {
   ResidualKind kind = ResidualKind::kUnjudgeable;
   float residual_px = 0.0f;  // +inf for kUnjudgeable
+
+  // Judged, and within threshold_px of where the ground truth puts the partner.
+  bool CorrectAt(double threshold_px) const {
+    return kind != ResidualKind::kUnjudgeable && residual_px <= threshold_px;
+  }
 };
 
 // A candidate ground-truth correspondence: keypoint a of A (with depth) reprojects within

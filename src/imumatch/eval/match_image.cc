@@ -151,7 +151,7 @@ cv::Mat DrawMatchImage(const PairVisual& visual, size_t run_index,
                                 : visual.keypoints_b[static_cast<size_t>(m.train_idx)].pt) +
                            off_b;
     const MatchResidual& r = run.residuals[i];
-    const bool ok = r.kind != ResidualKind::kUnjudgeable && r.residual_px <= options.threshold_px;
+    const bool ok = r.CorrectAt(options.threshold_px);
     if (ok) {
       ++correct;
       cv::line(canvas, pa, pb, kGreen, 1, cv::LINE_AA);

@@ -93,8 +93,7 @@ WindowRecall ComputeWindowRecall(const DetectorPairRecord& record, const MethodR
   const MethodRun& bf = record.runs[static_cast<size_t>(record.bf_run)];
   if (bf.residuals.size() != run.bf_partner_in_window.size()) return w;
   for (size_t k = 0; k < bf.residuals.size(); ++k) {
-    const MatchResidual& r = bf.residuals[k];
-    if (r.kind == ResidualKind::kUnjudgeable || !(r.residual_px <= threshold_px)) continue;
+    if (!bf.residuals[k].CorrectAt(threshold_px)) continue;
     ++w.checked;
     if (run.bf_partner_in_window[k]) {
       ++w.inside;
@@ -155,15 +154,12 @@ BruteForceFate ComputeBruteForceFate(const DetectorPairRecord& record, const Met
       run.match_bf_match.size() != run.residuals.size()) {
     return f;
   }
-  const auto correct = [threshold_px](const MatchResidual& r) {
-    return r.kind != ResidualKind::kUnjudgeable && r.residual_px <= threshold_px;
-  };
   for (size_t k = 0; k < bf.residuals.size(); ++k) {
-    if (!correct(bf.residuals[k])) continue;
+    if (!bf.residuals[k].CorrectAt(threshold_px)) continue;
     ++f.checked;
     const int j = run.bf_query_match[k];
     if (j >= 0) {
-      ++(correct(run.residuals[static_cast<size_t>(j)]) ? f.kept : f.matched_wrong);
+      ++(run.residuals[static_cast<size_t>(j)].CorrectAt(threshold_px) ? f.kept : f.matched_wrong);
       continue;
     }
     switch (run.bf_query_outcome[k]) {
@@ -194,9 +190,9 @@ BruteForceFate ComputeBruteForceFate(const DetectorPairRecord& record, const Met
     }
   }
   for (size_t j = 0; j < run.residuals.size(); ++j) {
-    if (!correct(run.residuals[j])) continue;
+    if (!run.residuals[j].CorrectAt(threshold_px)) continue;
     const int k = run.match_bf_match[j];
-    if (k < 0 || !correct(bf.residuals[static_cast<size_t>(k)])) ++f.gained;
+    if (k < 0 || !bf.residuals[static_cast<size_t>(k)].CorrectAt(threshold_px)) ++f.gained;
   }
   return f;
 }
