@@ -117,32 +117,30 @@ WindowRecall ComputeWindowRecall(const DetectorPairRecord& record, const MethodR
   return w;
 }
 
+namespace {
+// BruteForceFate's counts and their names, once for Add() and Named().
+constexpr std::pair<const char*, int BruteForceFate::*> kFateFields[] = {
+    {"checked", &BruteForceFate::checked},
+    {"kept", &BruteForceFate::kept},
+    {"matched_wrong", &BruteForceFate::matched_wrong},
+    {"refine_dropped", &BruteForceFate::refine_dropped},
+    {"no_prediction", &BruteForceFate::no_prediction},
+    {"no_candidate", &BruteForceFate::no_candidate},
+    {"inconsistent", &BruteForceFate::inconsistent},
+    {"distance", &BruteForceFate::distance},
+    {"ratio", &BruteForceFate::ratio},
+    {"mutual", &BruteForceFate::mutual},
+    {"gained", &BruteForceFate::gained}};
+}  // namespace
+
 void BruteForceFate::Add(const BruteForceFate& other) {
-  checked += other.checked;
-  kept += other.kept;
-  matched_wrong += other.matched_wrong;
-  refine_dropped += other.refine_dropped;
-  no_prediction += other.no_prediction;
-  no_candidate += other.no_candidate;
-  inconsistent += other.inconsistent;
-  distance += other.distance;
-  ratio += other.ratio;
-  mutual += other.mutual;
-  gained += other.gained;
+  for (const auto& [name, field] : kFateFields) this->*field += other.*field;
 }
 
 std::vector<std::pair<const char*, int>> BruteForceFate::Named() const {
-  return {{"checked", checked},
-          {"kept", kept},
-          {"matched_wrong", matched_wrong},
-          {"refine_dropped", refine_dropped},
-          {"no_prediction", no_prediction},
-          {"no_candidate", no_candidate},
-          {"inconsistent", inconsistent},
-          {"distance", distance},
-          {"ratio", ratio},
-          {"mutual", mutual},
-          {"gained", gained}};
+  std::vector<std::pair<const char*, int>> out;
+  for (const auto& [name, field] : kFateFields) out.emplace_back(name, this->*field);
+  return out;
 }
 
 BruteForceFate ComputeBruteForceFate(const DetectorPairRecord& record, const MethodRun& run,
