@@ -254,12 +254,12 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
 }
 
 // For each match of the brute-force run: does the guided search region of its query contain its
-// partner (in ideal pixels)? Also counts why a partner was missed.
-// Also links each brute-force match to this run's match of the same query, and back.
-void CheckWindows(const std::vector<Match>& bf_matches,
-                  const std::vector<KeypointPrediction>& predictions,
-                  const std::vector<KeypointInfo>& ideal_b, const std::vector<Match>& run_matches,
-                  MethodRun& run) {
+// partner (in ideal pixels), and if not, why; and which match of this run has the same query (and
+// back), for the fate of brute force's correct matches (ComputeBruteForceFate).
+void CompareWithBruteForce(const std::vector<Match>& bf_matches,
+                           const std::vector<KeypointPrediction>& predictions,
+                           const std::vector<KeypointInfo>& ideal_b,
+                           const std::vector<Match>& run_matches, MethodRun& run) {
   std::vector<int> run_match_of(predictions.size(), -1), bf_match_of(predictions.size(), -1);
   for (size_t j = 0; j < run_matches.size(); ++j) {
     run_match_of[static_cast<size_t>(run_matches[j].query_idx)] = static_cast<int>(j);
@@ -550,7 +550,8 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
       if (rec.bf_run >= 0) {
         for (size_t m = 0; m < options.methods.size(); ++m) {
           if (UsesPrediction(options.methods[m]) && !IsTracking(options.methods[m])) {
-            CheckWindows(bf_matches, run_predictions[m], cb.ideal, run_matches[m], rec.runs[m]);
+            CompareWithBruteForce(bf_matches, run_predictions[m], cb.ideal, run_matches[m],
+                                  rec.runs[m]);
           }
         }
       }
