@@ -23,7 +23,7 @@ fuzz_targets() { cat "$FUZZ_BUILD/tests/fuzz/targets.txt"; }
 
 fuzz_max_len() {
   case $1 in
-    load_image | load_depth) echo "$FUZZ_IMAGE_MAX_LEN" ;;
+    load_image | load_depth | png_decoder) echo "$FUZZ_IMAGE_MAX_LEN" ;;
     *) echo "$FUZZ_TEXT_MAX_LEN" ;;
   esac
 }
@@ -130,6 +130,11 @@ fuzz_make_seeds() {
     for f in "$dir"/*.*; do
       [ -e "$f" ] && mv "$f" "$dir/seed_$(basename "$f")"
     done
+  done
+  # The PNG decoder's corpus: the PNG seeds of both.
+  mkdir -p "$FUZZ_BUILD/corpus/png_decoder"
+  for f in "$FUZZ_BUILD"/corpus/load_image/seed_*.png "$FUZZ_BUILD"/corpus/load_depth/seed_*.png; do
+    [ -e "$f" ] && cp "$f" "$FUZZ_BUILD/corpus/png_decoder/$(basename "$(dirname "$f")")_$(basename "$f")"
   done
   return 0
 }

@@ -60,7 +60,7 @@ PassTiming SequentialOpenCvPass(const EvalSource& source, const EvaluationOption
   const auto t0 = SteadyClock::now();
   for (size_t i = 0; i < n; ++i) {
     const auto frame_start = SteadyClock::now();
-    const cv::Mat image = source.image_reader(e2e.first_frame + i);
+    const cv::Mat image = source.opencv_image_reader(e2e.first_frame + i);
     *size = image.size();
     orb->detectAndCompute(image, cv::noArray(), kp, desc);
     if (i > 0) {
@@ -190,8 +190,9 @@ EndToEndTiming MeasureEndToEnd(const EvalSource& source, const EvaluationOptions
                                const EndToEndOptions& e2e) {
   e2e.Check();
   options.Check();
-  IMUMATCH_CHECK(source.image_reader && source.depth_reader,
-                 "the end-to-end timing needs a source with separate image and depth readers");
+  IMUMATCH_CHECK(source.image_reader && source.depth_reader && source.opencv_image_reader,
+                 "the end-to-end timing needs a source with separate image and depth readers "
+                 "and an OpenCV image reader");
   const Dataset& dataset = source.dataset;
   const ImuBiasEstimate bias = options.motion_source == MotionSource::kImu
                                    ? EstimateImuBias(dataset, options.still_init_s)

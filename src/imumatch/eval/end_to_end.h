@@ -11,11 +11,13 @@ namespace imumatch {
 
 // End-to-end timing over a stream of consecutive frames, each read, described with ORB and
 // matched with the previous frame, in the same process:
-//   - sequential OpenCV: decode the image, cv::ORB (max_keypoints), BFMatcher knnMatch + ratio
-//     0.8, one step after the other (OpenCV with its own threads, as a user would run it);
+//   - sequential OpenCV: decode the image (cv::imdecode / cv::imread, gray), cv::ORB
+//     (max_keypoints), BFMatcher knnMatch + ratio 0.8, one step after the other (OpenCV with its
+//     own threads, as a user would run it);
 //   - imumatch on two cores, frame by frame (for latency): the frame's image and depth decoded at
-//     once on two cores, ORB with its pyramid levels split over the two cores
-//     (FeatureOptions::threads), then the IMU camera motion, prediction and guided matching;
+//     once on two cores (io's reader: PNGs through DecodePngFast), ORB with its pyramid levels
+//     split over the two cores (FeatureOptions::threads), then the IMU camera motion, prediction
+//     and guided matching;
 //   - imumatch on two cores, overlapped (for throughput): while frame k is described (ORB in two
 //     parts) and its depth decoded, frame k+1's image decodes; the four tasks go to OpenCV's two
 //     threads as they free up; then frame k is matched.

@@ -1,6 +1,7 @@
 #include "imumatch/eval/frame_source.h"
 
 #include <memory>
+#include <string>
 #include <vector>
 
 #include <opencv2/imgcodecs.hpp>
@@ -53,6 +54,11 @@ EvalSource MakeDiskSource(Dataset dataset) {
   source.reader = MakeDiskFrameReader(dataset);
   source.image_reader = MakeDiskImageReader(dataset);
   source.depth_reader = MakeDiskDepthReader(dataset);
+  auto frames = std::make_shared<std::vector<FrameRecord>>(dataset.frames);
+  source.opencv_image_reader = [frames](size_t index) {
+    IMUMATCH_CHECK(index < frames->size(), "frame index " << index);
+    return cv::imread((*frames)[index].image_path, cv::IMREAD_GRAYSCALE);
+  };
   source.exact_ground_truth = dataset.kind == DatasetKind::kSynthetic;
   source.dataset = std::move(dataset);
   return source;
@@ -71,7 +77,8 @@ EvalSource MakeSyntheticSource(const SyntheticSequence& sequence, const std::str
   d.imu_source_note = "simulated IMU (in-memory synthetic sequence)";
   for (const ImuSample& s : sequence.imu) d.imu.Push(s, "synthetic imu");
   struct Encoded {
-    std::vector<uchar> image, depth;
+    std::string image, depth;  // PNG files' bytes
+    std::string image_name, depth_name;
   };
   auto encoded = std::make_shared<std::vector<Encoded>>();
   for (size_t i = 0; i < sequence.frames.size(); ++i) {
@@ -85,17 +92,32 @@ EvalSource MakeSyntheticSource(const SyntheticSequence& sequence, const std::str
     d.frames.push_back(r);
     d.groundtruth_world_from_cam.push_back({f.t_ns, f.world_from_cam});
     Encoded e;
-    cv::imencode(".png", f.rgb, e.image);
-    cv::imencode(".png", f.depth, e.depth);
+    std::vector<uchar> bytes;
+    IMUMATCH_CHECK(cv::imencode(".png", f.rgb, bytes), "PNG encoding of frame " << i);
+    e.image.assign(bytes.begin(), bytes.end());
+    IMUMATCH_CHECK(cv::imencode(".png", f.depth, bytes), "PNG encoding of depth " << i);
+    e.depth.assign(bytes.begin(), bytes.end());
+    e.image_name = r.image_path;
+    e.depth_name = r.depth_path;
     encoded->push_back(std::move(e));
   }
+  // As files on disk are read (LoadImage / LoadDepth): the same decoder, the same gray.
   source.image_reader = [encoded](size_t index) {
     IMUMATCH_CHECK(index < encoded->size(), "frame index " << index);
-    return cv::imdecode((*encoded)[index].image, cv::IMREAD_GRAYSCALE);
+    const Encoded& e = (*encoded)[index];
+    return DecodeImage(e.image, e.image_name, ImageColor::kGray);
   };
   source.depth_reader = [encoded](size_t index) {
     IMUMATCH_CHECK(index < encoded->size(), "frame index " << index);
-    return cv::imdecode((*encoded)[index].depth, cv::IMREAD_UNCHANGED);
+    const Encoded& e = (*encoded)[index];
+    return DecodeDepth(e.depth, e.depth_name);
+  };
+  source.opencv_image_reader = [encoded](size_t index) {
+    IMUMATCH_CHECK(index < encoded->size(), "frame index " << index);
+    const std::string& png = (*encoded)[index].image;
+    return cv::imdecode(
+        cv::Mat(1, static_cast<int>(png.size()), CV_8UC1, const_cast<char*>(png.data())),
+        cv::IMREAD_GRAYSCALE);
   };
   source.reader = [image_reader = source.image_reader, depth_reader = source.depth_reader](
                       size_t index, bool with_depth) {

@@ -29,6 +29,10 @@ struct EvalSource {
   // The image and the depth of a frame on their own (both set by the makers below), so that a
   // pipeline can decode them on two cores. An empty depth Mat when the frame has none.
   std::function<cv::Mat(size_t index)> image_reader, depth_reader;
+  // The gray image as a program written with OpenCV alone reads it (cv::imread / cv::imdecode
+  // with IMREAD_GRAYSCALE, libpng's decoder and colour conversion): the end-to-end timing's
+  // sequential baseline. Set by the makers below.
+  std::function<cv::Mat(size_t index)> opencv_image_reader;
   bool exact_ground_truth = false;
 };
 

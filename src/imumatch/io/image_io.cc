@@ -18,6 +18,7 @@
 #include "imumatch/core/error.h"
 #include "imumatch/io/output_files.h"
 #include "imumatch/io/plausibility.h"
+#include "imumatch/io/png_decoder.h"
 
 namespace imumatch {
 namespace {
@@ -103,8 +104,8 @@ std::pair<int64_t, int64_t> HeaderSize(const std::string& bytes, const std::stri
                    "before decoding)");
 }
 
-// imread with the checks every loader shares.
-cv::Mat ReadChecked(const std::string& path, int flags) {
+// The whole file, with the checks every loader shares (exists, not a folder, not empty).
+std::string ReadFileChecked(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path, "image file not found");
@@ -120,28 +121,39 @@ cv::Mat ReadChecked(const std::string& path, int flags) {
     buffer << in.rdbuf();
     file = buffer.str();
   }
+  return file;
+}
+
+// Decodes an image file's bytes: PNGs through DecodePngFast when it handles them, everything else
+// (and every PNG it refuses) with cv::imdecode(IMREAD_UNCHANGED). The header's size is checked
+// before anything is allocated. gray: an 8-bit colour image comes back as gray, converted as
+// cv::cvtColor does (the fast path fuses it into its pass); other images come back unchanged.
+cv::Mat DecodeChecked(const std::string& file, const std::string& path, bool gray) {
+  if (file.empty()) throw InputError(path, "image file is empty (0 bytes)");
   if (file.size() > static_cast<size_t>(std::numeric_limits<int>::max())) {
     throw InputError(path, "image file larger than 2 GiB");
   }
   const auto [width, height] = HeaderSize(file, path);
   plausibility::CheckImageSize(width, height, path);
-  cv::Mat image;
-  try {
-    image = cv::imdecode(cv::Mat(1, static_cast<int>(file.size()), CV_8UC1, file.data()), flags);
-  } catch (const cv::Exception& e) {
-    throw InputError(path, std::string("cannot decode image: ") + e.what());
-  }
+  cv::Mat image = DecodePngFast(reinterpret_cast<const uint8_t*>(file.data()), file.size(),
+                                gray ? PngOutput::kGray : PngOutput::kUnchanged);
   if (image.empty()) {
-    throw InputError(path, "cannot decode image (unreadable, truncated or not an image format)");
+    try {
+      image = cv::imdecode(
+          cv::Mat(1, static_cast<int>(file.size()), CV_8UC1, const_cast<char*>(file.data())),
+          cv::IMREAD_UNCHANGED);
+    } catch (const cv::Exception& e) {
+      throw InputError(path, std::string("cannot decode image: ") + e.what());
+    }
+    if (image.empty()) {
+      throw InputError(path, "cannot decode image (unreadable, truncated or not an image format)");
+    }
   }
   plausibility::CheckImageSize(image.cols, image.rows, path);
   return image;
 }
 
-}  // namespace
-
-cv::Mat LoadImage(const std::string& path, ImageColor color) {
-  const cv::Mat raw = ReadChecked(path, cv::IMREAD_UNCHANGED);
+cv::Mat ToImage(const cv::Mat& raw, const std::string& path, ImageColor color) {
   if (raw.depth() != CV_8U) {
     throw InputError(path, "expected an 8-bit image, got " + DepthText(raw.depth()) +
                                " (is this a depth image?)");
@@ -171,8 +183,7 @@ cv::Mat LoadImage(const std::string& path, ImageColor color) {
   return out;
 }
 
-cv::Mat LoadDepth(const std::string& path, cv::Size expected_size) {
-  const cv::Mat raw = ReadChecked(path, cv::IMREAD_UNCHANGED);
+cv::Mat ToDepth(const cv::Mat& raw, const std::string& path, cv::Size expected_size) {
   if (raw.depth() != CV_16U || raw.channels() != 1) {
     throw InputError(path,
                      "depth must be a 16-bit single-channel PNG (raw / depth_scale = metres), "
@@ -185,6 +196,25 @@ cv::Mat LoadDepth(const std::string& path, cv::Size expected_size) {
         path, "depth image is " + SizeText(raw.size()) + ", expected " + SizeText(expected_size));
   }
   return raw;
+}
+
+}  // namespace
+
+cv::Mat LoadImage(const std::string& path, ImageColor color) {
+  return ToImage(DecodeChecked(ReadFileChecked(path), path, color == ImageColor::kGray), path,
+                 color);
+}
+
+cv::Mat LoadDepth(const std::string& path, cv::Size expected_size) {
+  return ToDepth(DecodeChecked(ReadFileChecked(path), path, false), path, expected_size);
+}
+
+cv::Mat DecodeImage(const std::string& bytes, const std::string& name, ImageColor color) {
+  return ToImage(DecodeChecked(bytes, name, color == ImageColor::kGray), name, color);
+}
+
+cv::Mat DecodeDepth(const std::string& bytes, const std::string& name, cv::Size expected_size) {
+  return ToDepth(DecodeChecked(bytes, name, false), name, expected_size);
 }
 
 RgbdImages LoadRgbd(const std::string& image_path, const std::string& depth_path,

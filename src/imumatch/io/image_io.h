@@ -6,7 +6,9 @@
 
 namespace imumatch {
 
-// Images are read with cv::imread. Every failure is an InputError naming the file.
+// Images are read whole, their header's size checked, then decoded: PNGs of the kinds datasets
+// hold (8-bit gray / RGB / RGBA, 16-bit gray) by DecodePngFast (png_decoder.h, about twice as
+// fast as libpng), everything else by cv::imdecode. Every failure is an InputError naming the file.
 
 enum class ImageColor {
   kGray,   // CV_8UC1 (colour images converted)
@@ -21,6 +23,13 @@ cv::Mat LoadImage(const std::string& path, ImageColor color = ImageColor::kGray)
 // Throws InputError(path, ...) for the cases above, for an 8-bit or multi-channel image ("depth
 // must be a 16-bit single-channel PNG"), and when expected_size is given and differs.
 cv::Mat LoadDepth(const std::string& path, cv::Size expected_size = cv::Size());
+
+// The same from a file's bytes already in memory (e.g. a PNG-encoded stream); `name` is what the
+// errors call it.
+cv::Mat DecodeImage(const std::string& bytes, const std::string& name,
+                    ImageColor color = ImageColor::kGray);
+cv::Mat DecodeDepth(const std::string& bytes, const std::string& name,
+                    cv::Size expected_size = cv::Size());
 
 // An image and its registered depth image of the same size.
 struct RgbdImages {

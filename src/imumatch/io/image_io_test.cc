@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "imumatch/camera/pinhole_camera.h"
 #include "imumatch/core/error.h"
@@ -60,6 +62,35 @@ TEST(ImageIo, LoadsEurocGrayFrame) {
   const cv::Mat color = LoadImage(
       DataPath("euroc_v101_excerpt/mav0/cam0/data/1403715273262142976.png"), ImageColor::kColor);
   EXPECT_EQ(color.type(), CV_8UC3);
+}
+
+// The datasets' own files, read through the fast PNG path (TUM: 8-bit RGB and 16-bit depth;
+// EuRoC: 8-bit gray and 16-bit depth), give exactly what OpenCV reads.
+TEST(ImageIo, RealFilesEqualWhatOpenCvReads) {
+  const auto opencv_gray = [](const std::string& path) {
+    const cv::Mat raw = cv::imread(path, cv::IMREAD_UNCHANGED);
+    cv::Mat gray = raw;
+    if (raw.channels() == 3) cv::cvtColor(raw, gray, cv::COLOR_BGR2GRAY);
+    return gray;
+  };
+  const auto same = [](const cv::Mat& a, const cv::Mat& b) {
+    return a.type() == b.type() && a.size() == b.size() && cv::norm(a, b, cv::NORM_INF) == 0.0;
+  };
+  for (const char* image : {"tum_fr1_xyz_pair/img_prev.png",
+                            "euroc_mh05_flight/mav0/cam0/data/1403638538577829376.png"}) {
+    EXPECT_TRUE(same(LoadImage(DataPath(image)), opencv_gray(DataPath(image)))) << image;
+    EXPECT_TRUE(same(LoadImage(DataPath(image), ImageColor::kColor).reshape(1),
+                     [&] {
+                       cv::Mat c = cv::imread(DataPath(image), cv::IMREAD_COLOR);
+                       return c.reshape(1);
+                     }()))
+        << image;
+  }
+  for (const char* depth : {"tum_fr1_xyz_pair/dep_prev.png",
+                            "euroc_mh05_flight/mav0/depth0/data/1403638538577829376.png"}) {
+    EXPECT_TRUE(same(LoadDepth(DataPath(depth)), cv::imread(DataPath(depth), cv::IMREAD_UNCHANGED)))
+        << depth;
+  }
 }
 
 TEST(ImageIo, MissingFile) {
