@@ -17,6 +17,15 @@ uint32_t Be32(const uint8_t* p) {
 
 bool IsType(const uint8_t* chunk, const char* type) { return std::memcmp(chunk + 4, type, 4) == 0; }
 
+// Chunk types are four ASCII letters (PNG specification 5.4); libpng refuses anything else.
+bool ValidType(const uint8_t* chunk) {
+  for (int k = 4; k < 8; ++k) {
+    const uint8_t c = chunk[k];
+    if (!((c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z'))) return false;
+  }
+  return true;
+}
+
 struct DecompressorDeleter {
   void operator()(libdeflate_decompressor* d) const { libdeflate_free_decompressor(d); }
 };
@@ -118,7 +127,7 @@ cv::Mat DecodePngFast(const uint8_t* data, size_t size, PngOutput output) {
     const uint32_t length = Be32(chunk);
     if (length > 0x7fffffffu || length > size - pos - 12) return {};
     const uint32_t crc = Be32(chunk + 8 + length);
-    if (libdeflate_crc32(0, chunk + 4, length + 4) != crc) return {};
+    if (!ValidType(chunk) || libdeflate_crc32(0, chunk + 4, length + 4) != crc) return {};
     const uint8_t* body = chunk + 8;
     if (first) {
       if (!IsType(chunk, "IHDR") || length != 13) return {};

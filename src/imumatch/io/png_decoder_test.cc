@@ -261,6 +261,15 @@ TEST(PngDecoderTest, LeavesWhatItDoesNotHandleToOpenCv) {
     EXPECT_TRUE(Decode(WritePng(s), PngOutput::kUnchanged).empty());
   }
   {
+    PngSpec s = SmallGray();  // a chunk type that is not four letters (found by the fuzzer)
+    s.extra_chunks = {
+        {"\xb8"
+         "DAT",
+         {1, 2}}};
+    EXPECT_TRUE(Decode(WritePng(s), PngOutput::kUnchanged).empty());
+    EXPECT_TRUE(OpenCvDecode(WritePng(s)).empty());  // libpng refuses it
+  }
+  {
     PngSpec s = SmallGray();  // an unknown ancillary chunk is skipped
     s.extra_chunks = {{"tEXt", {'a', 0, 'b'}}};
     EXPECT_TRUE(Identical(Decode(WritePng(s), PngOutput::kUnchanged), OpenCvDecode(WritePng(s))));
