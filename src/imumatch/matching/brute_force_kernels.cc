@@ -1,0 +1,543 @@
+// Compiled with -ffp-contract=off (CMakeLists.txt): the L2 kernels' bit-for-bit agreement needs
+// every multiply and add as written, never fused.
+#include "imumatch/matching/brute_force_kernels.h"
+
+#include <cstring>
+#include <limits>
+#include <string>
+
+#include "imumatch/core/error.h"
+
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define IMUMATCH_BF_X86 1
+#else
+#define IMUMATCH_BF_X86 0
+#endif
+
+namespace imumatch {
+
+const char* ToString(BruteForceKernel kernel) {
+  switch (kernel) {
+    case BruteForceKernel::kAuto:
+      return "auto";
+    case BruteForceKernel::kScalar:
+      return "scalar";
+    case BruteForceKernel::kPopcnt:
+      return "popcnt";
+    case BruteForceKernel::kAvx2:
+      return "avx2";
+    case BruteForceKernel::kAvx512:
+      return "avx512";
+  }
+  return "?";
+}
+
+std::string CpuFeaturesString() {
+  std::string s;
+#if IMUMATCH_BF_X86
+  __builtin_cpu_init();
+  auto add = [&](const char* name, bool has) {
+    if (has) s += (s.empty() ? "" : " ") + std::string(name);
+  };
+  add("popcnt", __builtin_cpu_supports("popcnt"));
+  add("avx2", __builtin_cpu_supports("avx2"));
+  add("fma", __builtin_cpu_supports("fma"));
+  add("avx512f", __builtin_cpu_supports("avx512f"));
+  add("avx512vpopcntdq", __builtin_cpu_supports("avx512vpopcntdq"));
+#endif
+  return s.empty() ? "none" : s;
+}
+
+void Nearest2::Reset(int n) {
+  best.assign(n, std::numeric_limits<float>::infinity());
+  second.assign(n, std::numeric_limits<float>::infinity());
+  best_idx.assign(n, -1);
+}
+
+namespace {
+
+constexpr int kQueryBlock = 4;
+constexpr int kTrainChunk = 256;
+
+__attribute__((always_inline)) inline void Update(float d, int j, float& best, float& second,
+                                                  int& best_idx) {
+  if (d < second) {
+    if (d < best) {
+      second = best;
+      best = d;
+      best_idx = j;
+    } else {
+      second = d;
+    }
+  }
+}
+
+__attribute__((always_inline)) inline uint64_t Load64(const uint8_t* p) {
+  uint64_t v;
+  std::memcpy(&v, p, 8);
+  return v;
+}
+
+// Hamming kernel over W 64-bit words. Blocks of 4 queries keep their 4*W words in registers while
+// a chunk of B streams past. Compiled twice: with and without the POPCNT instruction.
+// always_inline: the kernel must be compiled inside its target("popcnt") caller, otherwise GCC
+// emits calls to the portable __popcountdi2.
+template <int W>
+__attribute__((always_inline)) inline void HammingBlockKernel(const DescriptorView& a,
+                                                              const DescriptorView& b,
+                                                              Nearest2& out) {
+  const int n = a.rows, m = b.rows;
+  for (int j0 = 0; j0 < m; j0 += kTrainChunk) {
+    const int j1 = std::min(m, j0 + kTrainChunk);
+    int i = 0;
+    for (; i + kQueryBlock <= n; i += kQueryBlock) {
+      uint64_t q[kQueryBlock][W];
+#pragma GCC unroll 4
+      for (int u = 0; u < kQueryBlock; ++u) {
+#pragma GCC unroll 8
+        for (int w = 0; w < W; ++w) q[u][w] = Load64(a.Row(i + u) + 8 * w);
+      }
+      float best[kQueryBlock], second[kQueryBlock];
+      int idx[kQueryBlock];
+      for (int u = 0; u < kQueryBlock; ++u) {
+        best[u] = out.best[i + u];
+        second[u] = out.second[i + u];
+        idx[u] = out.best_idx[i + u];
+      }
+      for (int j = j0; j < j1; ++j) {
+        const uint8_t* row = b.Row(j);
+        uint64_t t[W];
+#pragma GCC unroll 8
+        for (int w = 0; w < W; ++w) t[w] = Load64(row + 8 * w);
+#pragma GCC unroll 4
+        for (int u = 0; u < kQueryBlock; ++u) {
+          int d = 0;
+#pragma GCC unroll 8
+          for (int w = 0; w < W; ++w) d += __builtin_popcountll(q[u][w] ^ t[w]);
+          Update(static_cast<float>(d), j, best[u], second[u], idx[u]);
+        }
+      }
+      for (int u = 0; u < kQueryBlock; ++u) {
+        out.best[i + u] = best[u];
+        out.second[i + u] = second[u];
+        out.best_idx[i + u] = idx[u];
+      }
+    }
+    for (; i < n; ++i) {
+      for (int j = j0; j < j1; ++j) {
+        const float d = static_cast<float>(HammingDistance(a.Row(i), b.Row(j), W * 8));
+        Update(d, j, out.best[i], out.second[i], out.best_idx[i]);
+      }
+    }
+  }
+}
+
+// Any multiple of 8 bytes: one pair at a time.
+__attribute__((always_inline)) inline void GenericKernel(const DescriptorView& a,
+                                                         const DescriptorView& b, Nearest2& out,
+                                                         DescriptorCostFn fn) {
+  for (int j0 = 0; j0 < b.rows; j0 += kTrainChunk) {
+    const int j1 = std::min(b.rows, j0 + kTrainChunk);
+    for (int i = 0; i < a.rows; ++i) {
+      for (int j = j0; j < j1; ++j) {
+        Update(fn(a.Row(i), b.Row(j), a.bytes), j, out.best[i], out.second[i], out.best_idx[i]);
+      }
+    }
+  }
+}
+
+void HammingPortable(const DescriptorView& a, const DescriptorView& b, Nearest2& out) {
+  if (a.bytes == 32) return HammingBlockKernel<4>(a, b, out);
+  if (a.bytes == 64) return HammingBlockKernel<8>(a, b, out);
+  GenericKernel(a, b, out, SelectCostFunction(DescriptorNorm::kHamming, a.bytes));
+}
+
+#if IMUMATCH_BF_X86
+// 32-byte descriptors (ORB, BRIEF-32, AKAZE-MLDB-32), written out by hand so the 16 query words
+// stay in registers and every distance is 4 POPCNTs (a templated loop version got vectorised by
+// GCC into an emulated popcount).
+__attribute__((target("popcnt"))) void Hamming32Popcnt(const DescriptorView& a,
+                                                       const DescriptorView& b, Nearest2& out) {
+  const int n = a.rows, m = b.rows;
+  for (int j0 = 0; j0 < m; j0 += kTrainChunk) {
+    const int j1 = std::min(m, j0 + kTrainChunk);
+    int i = 0;
+    for (; i + 4 <= n; i += 4) {
+      const uint8_t* r0 = a.Row(i);
+      const uint8_t* r1 = a.Row(i + 1);
+      const uint8_t* r2 = a.Row(i + 2);
+      const uint8_t* r3 = a.Row(i + 3);
+      const uint64_t a0 = Load64(r0), a1 = Load64(r0 + 8), a2 = Load64(r0 + 16),
+                     a3 = Load64(r0 + 24);
+      const uint64_t b0 = Load64(r1), b1 = Load64(r1 + 8), b2 = Load64(r1 + 16),
+                     b3 = Load64(r1 + 24);
+      const uint64_t c0 = Load64(r2), c1 = Load64(r2 + 8), c2 = Load64(r2 + 16),
+                     c3 = Load64(r2 + 24);
+      const uint64_t d0 = Load64(r3), d1 = Load64(r3 + 8), d2 = Load64(r3 + 16),
+                     d3 = Load64(r3 + 24);
+      float best0 = out.best[i], best1 = out.best[i + 1], best2 = out.best[i + 2],
+            best3 = out.best[i + 3];
+      float sec0 = out.second[i], sec1 = out.second[i + 1], sec2 = out.second[i + 2],
+            sec3 = out.second[i + 3];
+      int idx0 = out.best_idx[i], idx1 = out.best_idx[i + 1], idx2 = out.best_idx[i + 2],
+          idx3 = out.best_idx[i + 3];
+      for (int j = j0; j < j1; ++j) {
+        const uint8_t* row = b.Row(j);
+        const uint64_t t0 = Load64(row), t1 = Load64(row + 8), t2 = Load64(row + 16),
+                       t3 = Load64(row + 24);
+        const int e0 = __builtin_popcountll(a0 ^ t0) + __builtin_popcountll(a1 ^ t1) +
+                       __builtin_popcountll(a2 ^ t2) + __builtin_popcountll(a3 ^ t3);
+        const int e1 = __builtin_popcountll(b0 ^ t0) + __builtin_popcountll(b1 ^ t1) +
+                       __builtin_popcountll(b2 ^ t2) + __builtin_popcountll(b3 ^ t3);
+        const int e2 = __builtin_popcountll(c0 ^ t0) + __builtin_popcountll(c1 ^ t1) +
+                       __builtin_popcountll(c2 ^ t2) + __builtin_popcountll(c3 ^ t3);
+        const int e3 = __builtin_popcountll(d0 ^ t0) + __builtin_popcountll(d1 ^ t1) +
+                       __builtin_popcountll(d2 ^ t2) + __builtin_popcountll(d3 ^ t3);
+        Update(static_cast<float>(e0), j, best0, sec0, idx0);
+        Update(static_cast<float>(e1), j, best1, sec1, idx1);
+        Update(static_cast<float>(e2), j, best2, sec2, idx2);
+        Update(static_cast<float>(e3), j, best3, sec3, idx3);
+      }
+      out.best[i] = best0, out.best[i + 1] = best1, out.best[i + 2] = best2,
+      out.best[i + 3] = best3;
+      out.second[i] = sec0, out.second[i + 1] = sec1, out.second[i + 2] = sec2,
+      out.second[i + 3] = sec3;
+      out.best_idx[i] = idx0, out.best_idx[i + 1] = idx1, out.best_idx[i + 2] = idx2,
+      out.best_idx[i + 3] = idx3;
+    }
+    for (; i < n; ++i) {
+      const uint8_t* q = a.Row(i);
+      const uint64_t a0 = Load64(q), a1 = Load64(q + 8), a2 = Load64(q + 16), a3 = Load64(q + 24);
+      for (int j = j0; j < j1; ++j) {
+        const uint8_t* row = b.Row(j);
+        const int e = __builtin_popcountll(a0 ^ Load64(row)) +
+                      __builtin_popcountll(a1 ^ Load64(row + 8)) +
+                      __builtin_popcountll(a2 ^ Load64(row + 16)) +
+                      __builtin_popcountll(a3 ^ Load64(row + 24));
+        Update(static_cast<float>(e), j, out.best[i], out.second[i], out.best_idx[i]);
+      }
+    }
+  }
+}
+
+void HammingPopcnt(const DescriptorView& a, const DescriptorView& b, Nearest2& out) {
+  if (a.bytes == 32) return Hamming32Popcnt(a, b, out);
+  // Other lengths: one pair at a time through the POPCNT cost function.
+  GenericKernel(a, b, out, SelectCostFunction(DescriptorNorm::kHamming, a.bytes));
+}
+
+// ---- Wide kernels ----------------------------------------------------------------------------
+// Hamming: B is transposed into blocks of L rows, word-major (block k, word w holds word w of rows
+// kL .. kL+L-1), so one vector register holds the same word of L train descriptors and a query word
+// is broadcast against it. Each lane keeps its own best / second / index (ties: earliest index);
+// the lanes are merged at the end, ties again to the earliest index, which is exactly what the
+// scalar loop over j gives.
+constexpr uint64_t kFar = uint64_t{1} << 40;  // farther than any Hamming distance
+
+std::vector<uint64_t> TransposeWords(const DescriptorView& b, int lanes) {
+  const int words = b.bytes / 8, blocks = (b.rows + lanes - 1) / lanes;
+  std::vector<uint64_t> t(static_cast<size_t>(blocks) * words * lanes, 0);
+  for (int j = 0; j < b.rows; ++j) {
+    const int blk = j / lanes, lane = j % lanes;
+    for (int w = 0; w < words; ++w) {
+      t[(static_cast<size_t>(blk) * words + w) * lanes + lane] = Load64(b.Row(j) + 8 * w);
+    }
+  }
+  return t;
+}
+
+// Merges per-lane nearest two (lanes of one query) into out's entry i.
+void MergeLanes(const uint64_t* best, const uint64_t* second, const int64_t* idx, int lanes, int i,
+                Nearest2& out) {
+  int star = -1;
+  for (int l = 0; l < lanes; ++l) {
+    if (best[l] >= kFar) continue;
+    if (star < 0 || best[l] < best[star] || (best[l] == best[star] && idx[l] < idx[star])) {
+      star = l;
+    }
+  }
+  if (star < 0) return;
+  uint64_t sec = kFar;
+  for (int l = 0; l < lanes; ++l) {
+    sec = std::min(sec, second[l]);
+    if (l != star) sec = std::min(sec, best[l]);
+  }
+  out.best[i] = static_cast<float>(best[star]);
+  out.best_idx[i] = static_cast<int>(idx[star]);
+  out.second[i] = sec < kFar ? static_cast<float>(sec) : std::numeric_limits<float>::infinity();
+}
+
+__attribute__((target("avx512f,avx512vpopcntdq"))) void HammingAvx512(const DescriptorView& a,
+                                                                      const DescriptorView& b,
+                                                                      Nearest2& out) {
+  constexpr int L = 8;
+  const int words = a.bytes / 8, m = b.rows, blocks = (m + L - 1) / L;
+  const std::vector<uint64_t> bt = TransposeWords(b, L);
+  const __mmask8 last =
+      m % L == 0 ? static_cast<__mmask8>(0xFF) : static_cast<__mmask8>((1u << (m % L)) - 1u);
+  const __m512i far = _mm512_set1_epi64(static_cast<long long>(kFar));
+  const __m512i step = _mm512_set1_epi64(L);
+  alignas(64) uint64_t best_l[L], second_l[L];
+  alignas(64) int64_t idx_l[L];
+  __m512i q[8];
+  for (int i = 0; i < a.rows; ++i) {
+    for (int w = 0; w < words; ++w) {
+      q[w] = _mm512_set1_epi64(static_cast<long long>(Load64(a.Row(i) + 8 * w)));
+    }
+    __m512i best = far, second = far, idx = _mm512_set1_epi64(-1);
+    __m512i jv = _mm512_setr_epi64(0, 1, 2, 3, 4, 5, 6, 7);
+    const uint64_t* col = bt.data();
+    for (int blk = 0; blk < blocks; ++blk, col += static_cast<size_t>(words) * L) {
+      __m512i d = _mm512_popcnt_epi64(_mm512_xor_si512(q[0], _mm512_loadu_si512(col)));
+      for (int w = 1; w < words; ++w) {
+        d = _mm512_add_epi64(
+            d, _mm512_popcnt_epi64(_mm512_xor_si512(q[w], _mm512_loadu_si512(col + w * L))));
+      }
+      if (blk == blocks - 1) d = _mm512_mask_mov_epi64(far, last, d);
+      const __mmask8 lt = _mm512_cmplt_epu64_mask(d, best);
+      // (Masked forms with an explicit source: GCC 12 warns that the unmasked ones read an
+      // undefined register.)
+      const __m512i d_max = _mm512_mask_max_epu64(d, 0xFF, d, best);
+      second = _mm512_mask_min_epu64(second, 0xFF, second, d_max);
+      best = _mm512_mask_min_epu64(best, 0xFF, best, d);
+      idx = _mm512_mask_mov_epi64(idx, lt, jv);
+      jv = _mm512_add_epi64(jv, step);
+    }
+    _mm512_store_si512(best_l, best);
+    _mm512_store_si512(second_l, second);
+    _mm512_store_si512(idx_l, idx);
+    MergeLanes(best_l, second_l, idx_l, L, i, out);
+  }
+}
+
+__attribute__((target("avx2"))) void HammingAvx2(const DescriptorView& a, const DescriptorView& b,
+                                                 Nearest2& out) {
+  constexpr int L = 4;
+  const int words = a.bytes / 8, m = b.rows, blocks = (m + L - 1) / L;
+  const std::vector<uint64_t> bt = TransposeWords(b, L);
+  const __m256i lut = _mm256_setr_epi8(0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4, 0, 1, 1, 2,
+                                       1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4);
+  const __m256i nibble = _mm256_set1_epi8(0x0F), zero = _mm256_setzero_si256();
+  const __m256i far = _mm256_set1_epi64x(static_cast<long long>(kFar));
+  const __m256i step = _mm256_set1_epi64x(L);
+  alignas(32) int64_t lane_valid[L];
+  for (int l = 0; l < L; ++l) lane_valid[l] = (blocks - 1) * L + l < m ? -1 : 0;
+  const __m256i last_valid = _mm256_load_si256(reinterpret_cast<const __m256i*>(lane_valid));
+  alignas(32) uint64_t best_l[L], second_l[L];
+  alignas(32) int64_t idx_l[L];
+  __m256i q[8];
+  for (int i = 0; i < a.rows; ++i) {
+    for (int w = 0; w < words; ++w) {
+      q[w] = _mm256_set1_epi64x(static_cast<long long>(Load64(a.Row(i) + 8 * w)));
+    }
+    __m256i best = far, second = far, idx = _mm256_set1_epi64x(-1);
+    __m256i jv = _mm256_setr_epi64x(0, 1, 2, 3);
+    const uint64_t* col = bt.data();
+    for (int blk = 0; blk < blocks; ++blk, col += static_cast<size_t>(words) * L) {
+      // Byte counts (at most 8 per byte per word, 64 for 8 words) summed over the words, then
+      // over the 8 bytes of each 64-bit lane.
+      __m256i bytes = zero;
+      for (int w = 0; w < words; ++w) {
+        const __m256i x = _mm256_xor_si256(
+            q[w], _mm256_loadu_si256(reinterpret_cast<const __m256i*>(col + w * L)));
+        const __m256i lo = _mm256_and_si256(x, nibble);
+        const __m256i hi = _mm256_and_si256(_mm256_srli_epi16(x, 4), nibble);
+        bytes = _mm256_add_epi8(
+            bytes, _mm256_add_epi8(_mm256_shuffle_epi8(lut, lo), _mm256_shuffle_epi8(lut, hi)));
+      }
+      __m256i d = _mm256_sad_epu8(bytes, zero);
+      if (blk == blocks - 1) d = _mm256_blendv_epi8(far, d, last_valid);
+      // Distances are < 2^41: signed 64-bit compares are exact.
+      const __m256i lt = _mm256_cmpgt_epi64(best, d);         // d < best
+      const __m256i d_max = _mm256_blendv_epi8(d, best, lt);  // max(d, best)
+      second = _mm256_blendv_epi8(second, d_max, _mm256_cmpgt_epi64(second, d_max));
+      best = _mm256_blendv_epi8(best, d, lt);
+      idx = _mm256_blendv_epi8(idx, jv, lt);
+      jv = _mm256_add_epi64(jv, step);
+    }
+    _mm256_store_si256(reinterpret_cast<__m256i*>(best_l), best);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(second_l), second);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(idx_l), idx);
+    MergeLanes(best_l, second_l, idx_l, L, i, out);
+  }
+}
+
+// L2 in one summation order on every path, so that all paths give the same bits: 16 partial sums,
+// element k into partial k mod 16 (a multiply, then an add: no fused multiply-add, which the
+// scalar path would have to emulate slowly) in increasing k, then the fixed tree
+// ((p0+p8)+(p4+p12)) + ((p2+p10)+(p6+p14)) + ... below. AVX-512 holds the 16 partials in one
+// register, AVX2 in two, the scalar path in an array.
+inline float ReducePartials(const float* p) {
+  float h[8];
+  for (int l = 0; l < 8; ++l) h[l] = p[l] + p[l + 8];
+  float g[4];
+  for (int l = 0; l < 4; ++l) g[l] = h[l] + h[l + 4];
+  return (g[0] + g[2]) + (g[1] + g[3]);
+}
+
+float L2Canonical(const float* a, const float* b, int dims) {
+  float p[16] = {0};
+  for (int k = 0; k < dims; ++k) {
+    const float d = a[k] - b[k];
+    const float dd = d * d;
+    p[k % 16] = p[k % 16] + dd;
+  }
+  return ReducePartials(p);
+}
+
+void L2Scalar(const DescriptorView& a, const DescriptorView& b, Nearest2& out) {
+  const int dims = a.bytes / 4;
+  for (int i = 0; i < a.rows; ++i) {
+    const float* q = reinterpret_cast<const float*>(a.Row(i));
+    for (int j = 0; j < b.rows; ++j) {
+      Update(L2Canonical(q, reinterpret_cast<const float*>(b.Row(j)), dims), j, out.best[i],
+             out.second[i], out.best_idx[i]);
+    }
+  }
+}
+
+// Tail elements (k >= the last multiple of 16) go into their partials after the vector part, in
+// increasing k: the same order as L2Canonical.
+inline void AddTail(const float* q, const float* t, int from, int dims, float* p) {
+  for (int k = from; k < dims; ++k) {
+    const float d = q[k] - t[k];
+    const float dd = d * d;
+    p[k % 16] = p[k % 16] + dd;
+  }
+}
+
+__attribute__((target("avx512f"))) void L2Avx512(const DescriptorView& a, const DescriptorView& b,
+                                                 Nearest2& out) {
+  const int dims = a.bytes / 4, vec = dims - dims % 16;
+  alignas(64) float p[4][16];
+  for (int i0 = 0; i0 < a.rows; i0 += kQueryBlock) {
+    const int nq = std::min(kQueryBlock, a.rows - i0);
+    const float* q[kQueryBlock];
+    for (int u = 0; u < kQueryBlock; ++u) {
+      q[u] = reinterpret_cast<const float*>(a.Row(i0 + std::min(u, nq - 1)));
+    }
+    for (int j = 0; j < b.rows; ++j) {
+      const float* t = reinterpret_cast<const float*>(b.Row(j));
+      __m512 s0 = _mm512_setzero_ps(), s1 = s0, s2 = s0, s3 = s0;
+      for (int k = 0; k < vec; k += 16) {
+        const __m512 tv = _mm512_loadu_ps(t + k);
+        const __m512 d0 = _mm512_sub_ps(_mm512_loadu_ps(q[0] + k), tv);
+        const __m512 d1 = _mm512_sub_ps(_mm512_loadu_ps(q[1] + k), tv);
+        const __m512 d2 = _mm512_sub_ps(_mm512_loadu_ps(q[2] + k), tv);
+        const __m512 d3 = _mm512_sub_ps(_mm512_loadu_ps(q[3] + k), tv);
+        s0 = _mm512_add_ps(s0, _mm512_mul_ps(d0, d0));
+        s1 = _mm512_add_ps(s1, _mm512_mul_ps(d1, d1));
+        s2 = _mm512_add_ps(s2, _mm512_mul_ps(d2, d2));
+        s3 = _mm512_add_ps(s3, _mm512_mul_ps(d3, d3));
+      }
+      _mm512_store_ps(p[0], s0);
+      _mm512_store_ps(p[1], s1);
+      _mm512_store_ps(p[2], s2);
+      _mm512_store_ps(p[3], s3);
+      for (int u = 0; u < nq; ++u) {
+        AddTail(q[u], t, vec, dims, p[u]);
+        Update(ReducePartials(p[u]), j, out.best[i0 + u], out.second[i0 + u], out.best_idx[i0 + u]);
+      }
+    }
+  }
+}
+
+__attribute__((target("avx2"))) void L2Avx2(const DescriptorView& a, const DescriptorView& b,
+                                            Nearest2& out) {
+  const int dims = a.bytes / 4, vec = dims - dims % 16;
+  alignas(32) float p[4][16];
+  for (int i0 = 0; i0 < a.rows; i0 += kQueryBlock) {
+    const int nq = std::min(kQueryBlock, a.rows - i0);
+    const float* q[kQueryBlock];
+    for (int u = 0; u < kQueryBlock; ++u) {
+      q[u] = reinterpret_cast<const float*>(a.Row(i0 + std::min(u, nq - 1)));
+    }
+    for (int j = 0; j < b.rows; ++j) {
+      const float* t = reinterpret_cast<const float*>(b.Row(j));
+      __m256 lo[4], hi[4];
+      for (int u = 0; u < 4; ++u) lo[u] = hi[u] = _mm256_setzero_ps();
+      for (int k = 0; k < vec; k += 16) {
+        const __m256 tl = _mm256_loadu_ps(t + k), th = _mm256_loadu_ps(t + k + 8);
+        for (int u = 0; u < 4; ++u) {
+          const __m256 dl = _mm256_sub_ps(_mm256_loadu_ps(q[u] + k), tl);
+          const __m256 dh = _mm256_sub_ps(_mm256_loadu_ps(q[u] + k + 8), th);
+          lo[u] = _mm256_add_ps(lo[u], _mm256_mul_ps(dl, dl));
+          hi[u] = _mm256_add_ps(hi[u], _mm256_mul_ps(dh, dh));
+        }
+      }
+      for (int u = 0; u < nq; ++u) {
+        _mm256_store_ps(p[u], lo[u]);
+        _mm256_store_ps(p[u] + 8, hi[u]);
+        AddTail(q[u], t, vec, dims, p[u]);
+        Update(ReducePartials(p[u]), j, out.best[i0 + u], out.second[i0 + u], out.best_idx[i0 + u]);
+      }
+    }
+  }
+}
+#endif
+
+bool CpuHas(BruteForceKernel k) {
+#if IMUMATCH_BF_X86
+  switch (k) {
+    case BruteForceKernel::kAuto:
+    case BruteForceKernel::kScalar:
+      return true;
+    case BruteForceKernel::kPopcnt:
+      return __builtin_cpu_supports("popcnt");
+    case BruteForceKernel::kAvx2:
+      return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+    case BruteForceKernel::kAvx512:
+      return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vpopcntdq");
+  }
+  return false;
+#else
+  return k == BruteForceKernel::kAuto || k == BruteForceKernel::kScalar;
+#endif
+}
+
+}  // namespace
+
+void NearestTwo(const DescriptorView& a, const DescriptorView& b, BruteForceKernel kernel,
+                Nearest2& out) {
+  out.Reset(a.rows);
+  if (a.rows == 0 || b.rows == 0) return;
+  if (kernel == BruteForceKernel::kAuto) {
+    static const BruteForceKernel fastest = AvailableBruteForceKernels().back();  // CPU: fixed
+    kernel = fastest;
+  }
+  IMUMATCH_CHECK(CpuHas(kernel),
+                 "this CPU cannot run the " << ToString(kernel) << " brute-force path");
+  if (a.norm == DescriptorNorm::kHamming) {
+#if IMUMATCH_BF_X86
+    switch (kernel) {
+      case BruteForceKernel::kAvx512:
+        if (a.bytes <= 64) return HammingAvx512(a, b, out);
+        break;
+      case BruteForceKernel::kAvx2:
+        if (a.bytes <= 64) return HammingAvx2(a, b, out);
+        break;
+      default:
+        break;
+    }
+    if (kernel != BruteForceKernel::kScalar) return HammingPopcnt(a, b, out);
+#endif
+    return HammingPortable(a, b, out);
+  }
+#if IMUMATCH_BF_X86
+  if (kernel == BruteForceKernel::kAvx512) return L2Avx512(a, b, out);
+  if (kernel == BruteForceKernel::kAvx2) return L2Avx2(a, b, out);
+#endif
+  L2Scalar(a, b, out);
+}
+
+std::vector<BruteForceKernel> AvailableBruteForceKernels() {
+  std::vector<BruteForceKernel> out;
+  for (BruteForceKernel k : {BruteForceKernel::kScalar, BruteForceKernel::kPopcnt,
+                             BruteForceKernel::kAvx2, BruteForceKernel::kAvx512}) {
+    if (CpuHas(k)) out.push_back(k);
+  }
+  return out;
+}
+
+}  // namespace imumatch
