@@ -18,9 +18,9 @@ namespace imumatch {
 //     once on two cores (io's reader: PNGs through DecodePngFast), ORB with its pyramid levels
 //     split over the two cores (FeatureOptions::threads), then the IMU camera motion, prediction
 //     and guided matching;
-//   - imumatch on two cores, overlapped (for throughput): while frame k is described (ORB in two
-//     parts) and its depth decoded, frame k+1's image decodes; the four tasks go to OpenCV's two
-//     threads as they free up; then frame k is matched.
+//   - imumatch on two cores, overlapped (for throughput): while frame k is described (cv::ORB on
+//     one core), the other core decodes frame k+1's image and frame k's depth and matches frame
+//     k-1 with frame k-2: two tasks of about equal length per step.
 // Throughput: frames per unit of time when the stream is processed flat out (reported as ms per
 // frame). Latency: from the start of a frame's read to its matches, averaged over the frames.
 // Each figure is the best of `repetitions` passes over the stream (the machine may be shared;
@@ -43,7 +43,7 @@ struct EndToEndTiming {
   double overlapped_latency_ms = 0.0;
   int sequential_matches = 0;  // totals over one pass, for a sanity check
   int imumatch_matches = 0;
-  int overlapped_matches = 0;  // the same features and matches as imumatch_matches
+  int overlapped_matches = 0;  // ~imumatch_matches (unsplit cv::ORB: deeper levels differ)
   int motion_failures = 0;     // frames without a motion (IMU gap / no GT): matched by brute force
   int threads = 0;             // OpenCV's worker threads during the imumatch pass
   double Throughput() const {  // sequential / imumatch ms per frame, the faster imumatch mode

@@ -221,14 +221,14 @@ int main(int argc, char** argv) {
       "%-58s %13.2f %11.2f\n"
       "%-58s %13.2f %11.2f\n"
       "throughput x%.2f (target >= 2.5), latency x%.2f (target <= 0.6); matches per pass: "
-      "sequential %d, imumatch %d\n",
+      "sequential %d, imumatch %d, overlapped %d\n",
       t.width, t.height, t.frames, e2e.repetitions, t.threads, "", "ms per frame", "latency ms",
       "sequential OpenCV (decode, ORB, BF knn + ratio)", t.sequential_ms_per_frame,
       t.sequential_latency_ms, "imumatch frame by frame (decode|depth, ORB split, guided)",
       t.imumatch_ms_per_frame, t.imumatch_latency_ms,
-      "imumatch overlapped (next decode during ORB, guided)", t.overlapped_ms_per_frame,
+      "imumatch overlapped (ORB | decode, depth, guided)", t.overlapped_ms_per_frame,
       t.overlapped_latency_ms, t.Throughput(), t.LatencyRatio(), t.sequential_matches,
-      t.imumatch_matches);
+      t.imumatch_matches, t.overlapped_matches);
   // The work per frame of imumatch's stream on one thread: decode image + depth, ORB, guided.
   const double scaling = bench::TwoThreadScaling();
   std::printf(

@@ -132,9 +132,11 @@ TEST(EvalIntegrationTest, SyntheticGuidedIsPreciseAndFindsMoreCorrectMatches) {
 }
 
 // The end-to-end timing on a short stream: both imumatch schedules (frame by frame, overlapped)
-// describe the frames identically and so find the same matches; the timings are positive and
-// finite (their values are the benchmark's business, not a test's); a source without separate
-// image and depth readers is refused.
+// match every pair with its own frames and depth, so they find nearly the same matches (the
+// frame-by-frame schedule splits ORB's pyramid levels over two tasks, whose deeper levels differ
+// from cv::ORB's by rounding; a frame paired with the wrong depth or features would lose most of
+// its matches); the timings are positive and finite (their values are the benchmark's business,
+// not a test's); a source without separate image and depth readers is refused.
 TEST(EvalIntegrationTest, EndToEndSchedulesAgreeOnTheMatches) {
   SeedCaseOptions so;
   so.motions = {"left30"};
@@ -156,7 +158,7 @@ TEST(EvalIntegrationTest, EndToEndSchedulesAgreeOnTheMatches) {
   }
   EXPECT_EQ(t.motion_failures, 0);
   EXPECT_GT(t.imumatch_matches, 6 * 100);  // 6 pairs, a 30 deg/2 s turn: most keypoints match
-  EXPECT_EQ(t.overlapped_matches, t.imumatch_matches);
+  EXPECT_NEAR(t.overlapped_matches, t.imumatch_matches, 0.05 * t.imumatch_matches);
   EXPECT_GT(t.sequential_matches, 0);
   EvalSource bad = cases.front().source;
   bad.depth_reader = nullptr;
