@@ -7,6 +7,7 @@
 
 #include "imumatch/core/error.h"
 #include "imumatch/matching/scene_depth.h"
+#include "imumatch/matching/window_test.h"
 
 namespace imumatch {
 
@@ -47,57 +48,6 @@ float SquaredNorm(const uint8_t* row, int bytes) {
 float NormalizeDegrees(float a) {
   if (a >= 360.0f || a < 0.0f) a -= 360.0f * std::floor(a / 360.0f);
   return a < 360.0f ? a : 0.0f;  // a tiny negative a rounds up to 360
-}
-
-// The tests of one query's candidates: inside the window (box, and capsule for a prediction
-// without depth), orientation and size consistent with the prediction.
-struct CandidateTest {
-  float expected_angle, orient_tol, size_lo, size_hi;
-  bool check_angle, check_size;
-  float start_x, start_y, dx, dy, r2;  // the capsule's segment and squared radius
-};
-
-// Tests a run of candidates (slots begin..end-1 of arrays in slot order) and appends the slots
-// inside the window to consistent_slot (consistent with the prediction: possible matches) or, when
-// keep_inconsistent, to rival_slot (rivals in the ratio test only), each in slot order (capacity
-// for end - begin more in each). No branch per candidate (about half of them fail the box test; a
-// branch would mispredict a lot). Returns flags of the run: bit 0 some candidate inside the
-// window, bit 1 some inside with a consistent angle. Angles are in [0, 360) or -1 (no angle),
-// sizes > 0 or 0 (no size).
-template <bool kCapsule>
-int TestRun(const CandidateTest& t, const GuidedSearchScratch::Candidate* b, int begin, int end,
-            float lo_x, float hi_x, float lo_y, float hi_y, int keep_inconsistent,
-            int* consistent_slot, int* num_consistent, int* rival_slot, int* num_rivals) {
-  const float len2 = t.dx * t.dx + t.dy * t.dy;
-  const float denominator = len2 > 0.0f ? len2 : 1.0f;  // a point segment: dot = 0, s = 0
-  const int no_angle_check = !t.check_angle, no_size_check = !t.check_size;
-  int nc = *num_consistent, ni = *num_rivals, any = 0;
-  for (int k = begin; k < end; ++k) {
-    const float x = b[k].x, y = b[k].y;
-    int in = (x >= lo_x) & (x <= hi_x) & (y >= lo_y) & (y <= hi_y);
-    if constexpr (kCapsule) {
-      const float px = x - t.start_x, py = y - t.start_y;
-      const float s = std::min(std::max((px * t.dx + py * t.dy) / denominator, 0.0f), 1.0f);
-      const float ex = px - s * t.dx, ey = py - s * t.dy;
-      in &= static_cast<int>(ex * ex + ey * ey <= t.r2);
-    }
-    const float a = b[k].angle_deg;
-    const float d = std::fabs(a - t.expected_angle);
-    const int angle_ok =
-        no_angle_check | (a < 0.0f) | static_cast<int>(std::min(d, 360.0f - d) <= t.orient_tol);
-    const float size = b[k].size;
-    const int size_ok =
-        no_size_check | (size <= 0.0f) | ((size >= t.size_lo) & (size <= t.size_hi));
-    const int consistent = angle_ok & size_ok;
-    any |= in | ((in & angle_ok) << 1);
-    consistent_slot[nc] = k;
-    rival_slot[ni] = k;
-    nc += in & consistent;
-    ni += in & (consistent ^ 1) & keep_inconsistent;
-  }
-  *num_consistent = nc;
-  *num_rivals = ni;
-  return any;
 }
 
 }  // namespace
@@ -149,13 +99,18 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
   const float inf = std::numeric_limits<float>::infinity();
   const bool rivals_all = options.inconsistent_candidates_in_ratio;
 
-  // B's keypoints (as 16-byte records of x, y, angle, size) and descriptors copied into the grid's
-  // cell order: a window's candidates are then contiguous runs of slots, tested in tight loops
-  // (O(m) copy, a few us per 1000). Angles are normalised into [0, 360) once here (no angle: -1),
-  // sizes that are not positive numbers become 0 (no size check), as the tests below expect.
-  std::vector<GuidedSearchScratch::Candidate>& cand_b = scratch->candidates_b;
+  // B's keypoints (x, y, angle, size, one array each) and descriptors copied into the grid's cell
+  // order: a window's candidates are then contiguous runs of slots, tested 16 or 8 at a time
+  // (window_test.h; O(m) copy, a few us per 1000). Angles are normalised into [0, 360) once here
+  // (no angle: -1), sizes that are not positive numbers become 0 (no size check), as the tests
+  // expect.
+  std::vector<float>&cand_x = scratch->candidate_x, &cand_y = scratch->candidate_y,
+  &cand_angle = scratch->candidate_angle_deg, &cand_size = scratch->candidate_size;
   std::vector<uint8_t>& desc_b = scratch->desc_b;
-  cand_b.resize(m);
+  cand_x.resize(m);
+  cand_y.resize(m);
+  cand_angle.resize(m);
+  cand_size.resize(m);
   desc_b.resize(static_cast<size_t>(m) * bytes);
   constexpr int kPrefetchAhead = 8;  // rows are read in slot order: a random gather over B
   for (int k = 0; k < m; ++k) {
@@ -167,14 +122,21 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
     }
     const int j = grid_b.slot_index(k);
     const KeypointInfo& kb = keypoints_b[j];
-    cand_b[k].x = kb.x;
-    cand_b[k].y = kb.y;
-    cand_b[k].angle_deg = kb.angle_deg >= 0.0f && std::isfinite(kb.angle_deg)
-                              ? NormalizeDegrees(kb.angle_deg)
-                              : -1.0f;
-    cand_b[k].size = kb.size > 0.0f ? kb.size : 0.0f;
+    cand_x[k] = kb.x;
+    cand_y[k] = kb.y;
+    cand_angle[k] = kb.angle_deg >= 0.0f && std::isfinite(kb.angle_deg)
+                        ? NormalizeDegrees(kb.angle_deg)
+                        : -1.0f;
+    cand_size[k] = kb.size > 0.0f ? kb.size : 0.0f;
     std::memcpy(desc_b.data() + static_cast<size_t>(k) * bytes, descriptors_b.Row(j), bytes);
   }
+  CandidateView view;
+  view.x = cand_x.data();
+  view.y = cand_y.data();
+  view.angle_deg = cand_angle.data();
+  view.size = cand_size.data();
+  const WindowTestFn box_test = SelectWindowTest(false, options.kernel);
+  const WindowTestFn capsule_test = SelectWindowTest(true, options.kernel);
   const bool mutual = options.mutual;
   std::vector<float>& reverse_cost = scratch->reverse_cost;  // by slot
   std::vector<int>& reverse_idx = scratch->reverse_idx;
@@ -291,19 +253,16 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
     const auto run = [&](int begin, int end, float lo_x, float hi_x, float lo_y, float hi_y) {
       const int len = end - begin;
       stats.points_scanned += len;
-      if (consistent_slot.size() < static_cast<size_t>(std::max(nc, ni) + len)) {
-        const size_t size = 2 * static_cast<size_t>(std::max(nc, ni) + len);
+      if (consistent_slot.size() < static_cast<size_t>(std::max(nc, ni) + len + kWindowTestSlack)) {
+        const size_t size = 2 * static_cast<size_t>(std::max(nc, ni) + len + kWindowTestSlack);
         consistent_slot.resize(size);
         rival_slot.resize(size);
         consistent_cost.resize(size);
         rival_cost.resize(size);
       }
-      const int any =
-          capsule
-              ? TestRun<true>(test, cand_b.data(), begin, end, lo_x, hi_x, lo_y, hi_y,
-                              rivals_all_bit, consistent_slot.data(), &nc, rival_slot.data(), &ni)
-              : TestRun<false>(test, cand_b.data(), begin, end, lo_x, hi_x, lo_y, hi_y,
-                               rivals_all_bit, consistent_slot.data(), &nc, rival_slot.data(), &ni);
+      const int any = (capsule ? capsule_test : box_test)(
+          test, view, begin, end, lo_x, hi_x, lo_y, hi_y, rivals_all_bit, consistent_slot.data(),
+          &nc, rival_slot.data(), &ni);
       any_in_window |= (any & 1) != 0;
       any_angle_ok |= (any & 2) != 0;
     };
@@ -343,19 +302,19 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
     // another orientation): they do not make the match ambiguous.
     float second = inf, dup2 = -1.0f, bx = 0.0f, by = 0.0f;  // dup2 < 0: no duplicates
     if (best_j >= 0) {
-      const float best_size = cand_b[best_k].size;
+      const float best_size = cand_size[best_k];
       if (dedup) {
         const float scale =
             ref_b > 0.0f && best_size > 0.0f ? std::max(1.0f, best_size / ref_b) : 1.0f;
         dup2 = dup_radius * dup_radius * scale * scale;
       }
-      bx = cand_b[best_k].x;
-      by = cand_b[best_k].y;
+      bx = cand_x[best_k];
+      by = cand_y[best_k];
       // Without a branch per candidate (their outcomes are data, and mispredicted branches here
       // cost more than the arithmetic once windows hold a dozen candidates): a skipped
       // candidate's cost becomes +inf.
       for (int j = 0; j < nc; ++j) {
-        const float dx = cand_b[consistent_slot[j]].x - bx, dy = cand_b[consistent_slot[j]].y - by;
+        const float dx = cand_x[consistent_slot[j]] - bx, dy = cand_y[consistent_slot[j]] - by;
         const int skip = (j == best_j) | static_cast<int>(dx * dx + dy * dy <= dup2);
         second = std::min(second, consistent_cost[j] + InfIf(skip));
       }
@@ -398,7 +357,7 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
         int nr = 0;
         for (int j = 0; j < ni; ++j) {
           const int k = rival_slot[j];
-          const float dx = cand_b[k].x - bx, dy = cand_b[k].y - by;
+          const float dx = cand_x[k] - bx, dy = cand_y[k] - by;
           rival_slot[nr] = k;
           nr += static_cast<int>(dx * dx + dy * dy > dup2);
         }

@@ -520,40 +520,44 @@ TEST(GuidedMatcherTest, EqualsABruteForceReference) {
         expected_matches.push_back(i);
       }
     }
-    // The matcher.
+    // The matcher, on every instruction-set path of its window tests this CPU has.
     GridIndex grid;
     grid.Build(kps_b, 640, 480, static_cast<float>(o.grid_cell_size));
-    const MatchResult r = MatchGuided(predictions, kps_a, DescriptorView::FromMat(desc_a), kps_b,
-                                      grid, DescriptorView::FromMat(desc_b), o);
-    int differing = 0;
-    for (int i = 0; i < n; ++i) {
-      differing += r.outcomes[i] != outcome[i];
-      if (r.outcomes[i] != outcome[i]) {
-        ADD_FAILURE() << "query " << i << ": matcher " << ToString(r.outcomes[i]) << ", reference "
-                      << ToString(outcome[i]);
+    for (const BruteForceKernel kernel : AvailableBruteForceKernels()) {
+      SCOPED_TRACE(ToString(kernel));
+      o.kernel = kernel;
+      const MatchResult r = MatchGuided(predictions, kps_a, DescriptorView::FromMat(desc_a), kps_b,
+                                        grid, DescriptorView::FromMat(desc_b), o);
+      int differing = 0;
+      for (int i = 0; i < n; ++i) {
+        differing += r.outcomes[i] != outcome[i];
+        if (r.outcomes[i] != outcome[i]) {
+          ADD_FAILURE() << "query " << i << ": matcher " << ToString(r.outcomes[i])
+                        << ", reference " << ToString(outcome[i]);
+        }
       }
-    }
-    EXPECT_EQ(differing, 0) << "rivals_all " << rivals_all << " mutual " << mutual;
-    ASSERT_EQ(r.matches.size(), expected_matches.size());
-    for (size_t k = 0; k < r.matches.size(); ++k) {
-      const Match& mt = r.matches[k];
-      const int i = expected_matches[k];
-      EXPECT_EQ(mt.query_idx, i);
-      EXPECT_EQ(mt.train_idx, best_of[i]);
-      EXPECT_NEAR(mt.distance, std::sqrt(best_cost[i]), 1e-4);
-      if (second_cost[i] < 1e300) {
-        EXPECT_NEAR(mt.second_distance, std::sqrt(second_cost[i]), 1e-4);
+      EXPECT_EQ(differing, 0) << "rivals_all " << rivals_all << " mutual " << mutual;
+      ASSERT_EQ(r.matches.size(), expected_matches.size());
+      for (size_t k = 0; k < r.matches.size(); ++k) {
+        const Match& mt = r.matches[k];
+        const int i = expected_matches[k];
+        EXPECT_EQ(mt.query_idx, i);
+        EXPECT_EQ(mt.train_idx, best_of[i]);
+        EXPECT_NEAR(mt.distance, std::sqrt(best_cost[i]), 1e-4);
+        if (second_cost[i] < 1e300) {
+          EXPECT_NEAR(mt.second_distance, std::sqrt(second_cost[i]), 1e-4);
+        }
       }
+      // Every consistent candidate's distance is computed; an inconsistent rival's only when the
+      // best passes the ratio against the runner-up and the threshold, where it decides.
+      EXPECT_EQ(r.stats.distances_computed, expected_distances);
+      // The case is not trivial: many candidates per window, all outcomes present.
+      EXPECT_GT(r.stats.distances_computed, 3 * n);
+      EXPECT_GT(r.stats.points_scanned, 10 * n);
+      EXPECT_GT(r.stats.matched, n / 4);
+      EXPECT_GT(r.stats.ratio_test + r.stats.distance_threshold, n / 20);
+      EXPECT_EQ(r.stats.mutual > 0, mutual);
     }
-    // Every consistent candidate's distance is computed; an inconsistent rival's only when the
-    // best passes the ratio against the runner-up and the threshold, where it decides.
-    EXPECT_EQ(r.stats.distances_computed, expected_distances);
-    // The case is not trivial: many candidates per window, all outcomes present.
-    EXPECT_GT(r.stats.distances_computed, 3 * n);
-    EXPECT_GT(r.stats.points_scanned, 10 * n);
-    EXPECT_GT(r.stats.matched, n / 4);
-    EXPECT_GT(r.stats.ratio_test + r.stats.distance_threshold, n / 20);
-    EXPECT_EQ(r.stats.mutual > 0, mutual);
   }
 }
 
