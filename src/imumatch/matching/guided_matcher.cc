@@ -11,7 +11,7 @@
 
 #include "imumatch/core/error.h"
 #include "imumatch/matching/scene_depth.h"
-#include "imumatch/matching/window_test.h"
+#include "imumatch/matching/window_scan.h"
 
 namespace imumatch {
 
@@ -136,7 +136,7 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
 
   // B's keypoints (x, y, angle, size, one array each) and descriptors copied into the grid's cell
   // order: a window's candidates are then contiguous runs of slots, tested 16 or 8 at a time
-  // (window_test.h; O(m) copy, a few us per 1000). Angles are normalised into [0, 360) once here
+  // (window_scan.h; O(m) copy, a few us per 1000). Angles are normalised into [0, 360) once here
   // (no angle: -1), sizes that are not positive numbers become 0 (no size check), as the tests
   // expect.
   std::vector<float>&cand_x = scratch->candidate_x, &cand_y = scratch->candidate_y,
@@ -170,8 +170,8 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
   view.y = cand_y.data();
   view.angle_deg = cand_angle.data();
   view.size = cand_size.data();
-  const WindowTestFn box_test = SelectWindowTest(false, options.kernel);
-  const WindowTestFn capsule_test = SelectWindowTest(true, options.kernel);
+  const WindowScanFn box_test = SelectWindowScan(false, options.kernel);
+  const WindowScanFn capsule_test = SelectWindowScan(true, options.kernel);
   const bool mutual = options.mutual;
   std::vector<float>& reverse_cost = scratch->reverse_cost;  // by slot
   std::vector<int>& reverse_idx = scratch->reverse_idx;
@@ -288,8 +288,8 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
     const auto run = [&](int begin, int end, float lo_x, float hi_x, float lo_y, float hi_y) {
       const int len = end - begin;
       stats.points_scanned += len;
-      if (consistent_slot.size() < static_cast<size_t>(std::max(nc, ni) + len + kWindowTestSlack)) {
-        const size_t size = 2 * static_cast<size_t>(std::max(nc, ni) + len + kWindowTestSlack);
+      if (consistent_slot.size() < static_cast<size_t>(std::max(nc, ni) + len + kWindowScanSlack)) {
+        const size_t size = 2 * static_cast<size_t>(std::max(nc, ni) + len + kWindowScanSlack);
         consistent_slot.resize(size);
         rival_slot.resize(size);
         consistent_cost.resize(size);

@@ -53,7 +53,7 @@ struct GuidedMatcherOptions {
   // typical windows +-4..10 px): 8 px beats 16 and 24 px by 1.3-2x, because real keypoints cluster
   // and a coarse cell makes every query scan its cluster; 4-6 px gains little more.
   double grid_cell_size = 8.0;
-  // Instruction-set path of the window tests (window_test.h): kAuto picks the fastest the CPU
+  // Instruction-set path of the window tests (window_scan.h): kAuto picks the fastest the CPU
   // has; every path gives the same matches. kPopcnt runs the portable test.
   BruteForceKernel kernel = BruteForceKernel::kAuto;
 
@@ -75,7 +75,7 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
 // keypoint). Passing the same scratch to successive calls (one per thread) reuses it: fresh large
 // buffers every frame cost page faults and zeroing that grow faster than the keypoint count.
 struct GuidedSearchScratch {
-  // B's keypoints as the window tests read them (window_test.h), one array per field.
+  // B's keypoints as the window tests read them (window_scan.h), one array per field.
   std::vector<float> candidate_x, candidate_y, candidate_angle_deg, candidate_size;
   std::vector<uint8_t> desc_b;
   std::vector<float> reverse_cost;

@@ -1,4 +1,4 @@
-#include "imumatch/matching/window_test.h"
+#include "imumatch/matching/window_scan.h"
 
 #include <gtest/gtest.h>
 
@@ -11,7 +11,7 @@
 namespace imumatch {
 namespace {
 
-// The window test written out per candidate with branches, from its contract (window_test.h).
+// The window test written out per candidate with branches, from its contract (window_scan.h).
 struct Expected {
   std::vector<int> consistent, rivals;
   int flags = 0;
@@ -52,7 +52,7 @@ Expected Reference(const CandidateTest& t, const CandidateView& b, int begin, in
 // Every path against the reference: runs of every length 0..40 at every offset modulo 16 (the
 // vector tails), points on the box's edges and the capsule's rim, missing angles and sizes,
 // checks on and off, rivals kept or not; the lists must be equal entry for entry.
-TEST(WindowTestTest, EveryPathEqualsTheReference) {
+TEST(WindowScanTest, EveryPathEqualsTheReference) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
   const int m = 400;
@@ -98,10 +98,10 @@ TEST(WindowTestTest, EveryPathEqualsTheReference) {
                 Reference(t, view, begin, begin + len, lo_x, hi_x, lo_y, hi_y, keep, capsule);
             non_empty += !e.consistent.empty() && !e.rivals.empty();
             for (const BruteForceKernel kernel : AvailableBruteForceKernels()) {
-              std::vector<int> consistent(3 + len + kWindowTestSlack, -7),
-                  rivals(2 + len + kWindowTestSlack, -7);
+              std::vector<int> consistent(3 + len + kWindowScanSlack, -7),
+                  rivals(2 + len + kWindowScanSlack, -7);
               int nc = 3, ni = 2;  // appended after entries already there
-              const int flags = SelectWindowTest(capsule, kernel)(
+              const int flags = SelectWindowScan(capsule, kernel)(
                   t, view, begin, begin + len, lo_x, hi_x, lo_y, hi_y, keep, consistent.data(), &nc,
                   rivals.data(), &ni);
               const std::vector<int> got_c(consistent.begin() + 3, consistent.begin() + nc);
@@ -123,16 +123,16 @@ TEST(WindowTestTest, EveryPathEqualsTheReference) {
   EXPECT_GT(non_empty, 1000);  // runs with both kinds of candidates, not only empty ones
 }
 
-TEST(WindowTestTest, AnyPathTheCpuLacksIsRefused) {
+TEST(WindowScanTest, AnyPathTheCpuLacksIsRefused) {
   const std::vector<BruteForceKernel> have = AvailableBruteForceKernels();
   for (const BruteForceKernel k : {BruteForceKernel::kAvx2, BruteForceKernel::kAvx512}) {
     if (std::find(have.begin(), have.end(), k) == have.end()) {
-      EXPECT_THROW(SelectWindowTest(false, k), InvalidArgument);
+      EXPECT_THROW(SelectWindowScan(false, k), InvalidArgument);
     } else {
-      EXPECT_NE(SelectWindowTest(true, k), nullptr);
+      EXPECT_NE(SelectWindowScan(true, k), nullptr);
     }
   }
-  EXPECT_NE(SelectWindowTest(false, BruteForceKernel::kAuto), nullptr);
+  EXPECT_NE(SelectWindowScan(false, BruteForceKernel::kAuto), nullptr);
 }
 
 }  // namespace

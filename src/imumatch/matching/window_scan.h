@@ -30,11 +30,11 @@ struct CandidateTest {
 // Tests slots [begin, end) against the box [lo_x, hi_x] x [lo_y, hi_y] (and the capsule) and
 // appends those inside to consistent_slot (consistent with the prediction: possible matches) or,
 // when keep_inconsistent is 1, to rival_slot (rivals in the ratio test only), advancing *num_*.
-// Each list needs room for (end - begin) + kWindowTestSlack more entries: the vector paths store
+// Each list needs room for (end - begin) + kWindowScanSlack more entries: the vector paths store
 // whole registers. Returns flags of the run: bit 0 some candidate inside the window, bit 1 some
 // inside with a consistent angle.
-constexpr int kWindowTestSlack = 16;
-using WindowTestFn = int (*)(const CandidateTest& test, const CandidateView& b, int begin, int end,
+constexpr int kWindowScanSlack = 16;
+using WindowScanFn = int (*)(const CandidateTest& test, const CandidateView& b, int begin, int end,
                              float lo_x, float hi_x, float lo_y, float hi_y, int keep_inconsistent,
                              int* consistent_slot, int* num_consistent, int* rival_slot,
                              int* num_rivals);
@@ -43,6 +43,6 @@ using WindowTestFn = int (*)(const CandidateTest& test, const CandidateView& b, 
 // path: kAuto = AVX-512F when the CPU has the brute force's AVX-512 path, else AVX2, else portable;
 // kPopcnt runs the portable test (it has no vector form). A forced path the CPU lacks throws
 // InvalidArgument.
-WindowTestFn SelectWindowTest(bool capsule, BruteForceKernel kernel);
+WindowScanFn SelectWindowScan(bool capsule, BruteForceKernel kernel);
 
 }  // namespace imumatch

@@ -1,6 +1,6 @@
 // Compiled with -ffp-contract=off (CMakeLists.txt): the capsule test must round as written on every
 // path (no fused multiply-add), so that the vector paths give the portable path's lists.
-#include "imumatch/matching/window_test.h"
+#include "imumatch/matching/window_scan.h"
 
 #include <algorithm>
 #include <array>
@@ -120,7 +120,7 @@ __attribute__((target("avx512f"))) int TestRunAvx512(const CandidateTest& t, con
     any_angle |= in & angle_ok;
     const __mmask16 take = in & consistent, rival = in & static_cast<__mmask16>(~consistent) & keep;
     // Register-to-register compress, then a plain store (the memory form of VPCOMPRESSD is
-    // microcoded and slow on AMD Zen 4); the lists have kWindowTestSlack spare entries.
+    // microcoded and slow on AMD Zen 4); the lists have kWindowScanSlack spare entries.
     _mm512_storeu_si512(consistent_slot + nc, _mm512_maskz_compress_epi32(take, slot));
     _mm512_storeu_si512(rival_slot + ni, _mm512_maskz_compress_epi32(rival, slot));
     nc += __builtin_popcount(take);
@@ -231,7 +231,7 @@ bool Available(BruteForceKernel k) {
 
 }  // namespace
 
-WindowTestFn SelectWindowTest(bool capsule, BruteForceKernel kernel) {
+WindowScanFn SelectWindowScan(bool capsule, BruteForceKernel kernel) {
   if (kernel == BruteForceKernel::kAuto) {
     kernel = Available(BruteForceKernel::kAvx512) ? BruteForceKernel::kAvx512
              : Available(BruteForceKernel::kAvx2) ? BruteForceKernel::kAvx2
