@@ -456,3 +456,48 @@ TEST(PredictorTest, SampleDepthModes) {
 
 }  // namespace
 }  // namespace imumatch
+
+namespace imumatch {
+namespace {
+
+// SampleDepths visits the keypoints row by row (for the cache); each keypoint must still get
+// exactly what SampleDepth gives it alone: random positions, on the border, off the image and
+// NaN, both depth types, every mode.
+TEST(PredictorTest, SampleDepthsEqualsSampleDepthPerKeypoint) {
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> ux(-3.0f, 82.0f), uy(-3.0f, 62.0f);
+  cv::Mat raw(60, 80, CV_16UC1);
+  cv::randu(raw, 0, 9000);
+  raw.setTo(0, raw < 1500);  // holes
+  cv::Mat metres;
+  raw.convertTo(metres, CV_32F, 1.0 / 5000.0);
+  std::vector<KeypointInfo> infos(500);
+  std::vector<cv::KeyPoint> cv_points(infos.size());
+  for (size_t i = 0; i < infos.size(); ++i) {
+    float x = ux(rng), y = uy(rng);
+    if (i % 50 == 0) y = std::numeric_limits<float>::quiet_NaN();
+    if (i % 37 == 0) y = 59.49f;
+    if (i % 41 == 0) y = -0.5f;
+    infos[i] = {x, y, 0.0f, 7.0f, 0};
+    cv_points[i].pt = cv::Point2f(x, y);
+  }
+  for (const DepthSampling mode :
+       {DepthSampling::kNearest, DepthSampling::kMin3x3, DepthSampling::kMedian3x3}) {
+    for (const cv::Mat& depth : {raw, metres}) {
+      const double scale = depth.type() == CV_16UC1 ? 5000.0 : 1.0;
+      const std::vector<float> a = SampleDepths(depth, scale, infos, mode);
+      const std::vector<float> b = SampleDepths(depth, scale, cv_points, mode);
+      int valid = 0;
+      for (size_t i = 0; i < infos.size(); ++i) {
+        const float one = SampleDepth(depth, scale, infos[i].x, infos[i].y, mode);
+        valid += std::isfinite(one);
+        EXPECT_TRUE((std::isnan(one) && std::isnan(a[i])) || one == a[i]) << i;
+        EXPECT_TRUE((std::isnan(one) && std::isnan(b[i])) || one == b[i]) << i;
+      }
+      EXPECT_GT(valid, 300);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace imumatch
