@@ -5,10 +5,6 @@
 #include <cstring>
 #include <limits>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
-
 #include "imumatch/core/error.h"
 #include "imumatch/matching/scene_depth.h"
 #include "imumatch/matching/window_scan.h"
@@ -39,44 +35,6 @@ inline float InfIf(int flag) {
   float f;
   std::memcpy(&f, &bits, sizeof f);
   return f;
-}
-
-// Sum of squares of a float descriptor: 16 partial sums (element k into partial k mod 16, for k
-// below the last multiple of 16) added by a fixed tree, then the tail in order; the same result
-// on every machine and path. One running sum made it a chain of 128 dependent additions per SIFT
-// descriptor, two per query (12 % of the SIFT search).
-float SquaredNorm(const uint8_t* row, int bytes) {
-  const int n = bytes / 4;
-  int k = 0;
-  float r[4];  // partials l + l+8 + (l+4) + (l+12), l = 0..3
-#if defined(__SSE2__)
-  __m128 a0 = _mm_setzero_ps(), a1 = _mm_setzero_ps(), a2 = _mm_setzero_ps(), a3 = _mm_setzero_ps();
-  for (; k + 16 <= n; k += 16) {
-    const float* v = reinterpret_cast<const float*>(row) + k;
-    const __m128 v0 = _mm_loadu_ps(v), v1 = _mm_loadu_ps(v + 4), v2 = _mm_loadu_ps(v + 8),
-                 v3 = _mm_loadu_ps(v + 12);
-    a0 = _mm_add_ps(a0, _mm_mul_ps(v0, v0));
-    a1 = _mm_add_ps(a1, _mm_mul_ps(v1, v1));
-    a2 = _mm_add_ps(a2, _mm_mul_ps(v2, v2));
-    a3 = _mm_add_ps(a3, _mm_mul_ps(v3, v3));
-  }
-  _mm_storeu_ps(r, _mm_add_ps(_mm_add_ps(a0, a2), _mm_add_ps(a1, a3)));
-#else
-  float p[16] = {};
-  for (; k + 16 <= n; k += 16) {
-    float v[16];
-    std::memcpy(v, row + 4 * static_cast<size_t>(k), sizeof v);
-    for (int l = 0; l < 16; ++l) p[l] += v[l] * v[l];
-  }
-  for (int l = 0; l < 4; ++l) r[l] = (p[l] + p[l + 8]) + (p[l + 4] + p[l + 12]);
-#endif
-  float sum = (r[0] + r[2]) + (r[1] + r[3]);
-  for (; k < n; ++k) {
-    float v;
-    std::memcpy(&v, row + 4 * static_cast<size_t>(k), sizeof v);
-    sum += v * v;
-  }
-  return sum;
 }
 
 // An angle in [0, 360) (NaN stays NaN).
@@ -129,6 +87,11 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
   const bool use_ratio = options.ratio < 1.0;
   const float max_hamming = static_cast<float>(options.max_hamming_fraction * bytes * 8);
   const float max_l2_rel2 = static_cast<float>(options.max_l2_relative * options.max_l2_relative);
+  // The L2 threshold's descriptor norms: the squared L2 distance to a zero row, by the same
+  // vectorised kernel as the distances (a running sum was a chain of 128 dependent additions per
+  // SIFT descriptor, twice per query: 12 % of the SIFT search).
+  const DescriptorCostFn squared_norm = l2 ? SelectCostFunction(norm, bytes) : nullptr;
+  const std::vector<uint8_t> zeros(l2 ? static_cast<size_t>(bytes) : 0, 0);
   const float orient_tol = static_cast<float>(options.orientation_tolerance_deg);
   const float scale_tol = static_cast<float>(options.scale_tolerance_factor);
   const float inf = std::numeric_limits<float>::infinity();
@@ -373,8 +336,9 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
     // rival lies beyond the threshold) must still be distinctive by the ratio.
     float max_cost = max_hamming;
     if (l2) {
-      const float na = SquaredNorm(da, bytes);
-      const float nb = SquaredNorm(desc_b.data() + static_cast<size_t>(best_k) * bytes, bytes);
+      const float na = squared_norm(da, zeros.data(), bytes);
+      const float nb =
+          squared_norm(desc_b.data() + static_cast<size_t>(best_k) * bytes, zeros.data(), bytes);
       max_cost = max_l2_rel2 * 0.5f * (na + nb);
     }
     if (best > max_cost) {
