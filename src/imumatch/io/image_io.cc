@@ -104,14 +104,13 @@ std::pair<int64_t, int64_t> HeaderSize(const std::string& bytes, const std::stri
                    "before decoding)");
 }
 
-// The whole file, with the checks every loader shares (exists, not a folder, not empty).
+// The whole file, with the checks that need the path (exists, not a folder); DecodeChecked checks
+// the bytes (empty, too large, header size).
 std::string ReadFileChecked(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path, "image file not found");
   if (fs::is_directory(path, ec)) throw InputError(path, "is a folder, not an image file");
-  const auto bytes = fs::file_size(path, ec);
-  if (!ec && bytes == 0) throw InputError(path, "image file is empty (0 bytes)");
   // Read once: the header's size is checked on the same bytes that are then decoded.
   std::string file;
   {
@@ -201,12 +200,11 @@ cv::Mat ToDepth(const cv::Mat& raw, const std::string& path, cv::Size expected_s
 }  // namespace
 
 cv::Mat LoadImage(const std::string& path, ImageColor color) {
-  return ToImage(DecodeChecked(ReadFileChecked(path), path, color == ImageColor::kGray), path,
-                 color);
+  return DecodeImage(ReadFileChecked(path), path, color);
 }
 
 cv::Mat LoadDepth(const std::string& path, cv::Size expected_size) {
-  return ToDepth(DecodeChecked(ReadFileChecked(path), path, false), path, expected_size);
+  return DecodeDepth(ReadFileChecked(path), path, expected_size);
 }
 
 cv::Mat DecodeImage(const std::string& bytes, const std::string& name, ImageColor color) {
