@@ -40,33 +40,42 @@ void PutBe32(uint8_t* p, uint32_t v) {
   for (int k = 0; k < 4; ++k) p[k] = static_cast<uint8_t>(v >> (24 - 8 * k));
 }
 
-// Rewrites the CRC of every chunk that lies inside the buffer.
-void FixCrcs(uint8_t* data, size_t size) {
+// Calls visit(pos, length) for each chunk (at byte pos, data length) that lies inside the buffer,
+// in order. Returns false when a chunk runs past the end (the walk stops there).
+template <typename Visit>
+bool ForEachChunk(const uint8_t* data, size_t size, Visit&& visit) {
   size_t pos = 8;
   while (size >= 12 && pos <= size - 12) {
     const uint32_t length = Be32(data + pos);
-    if (length > size - pos - 12) break;
-    PutBe32(data + pos + 8 + length, libdeflate_crc32(0, data + pos + 4, length + 4));
+    if (length > size - pos - 12) return false;
+    visit(pos, static_cast<size_t>(length));
     pos += 12 + static_cast<size_t>(length);
   }
+  return true;
+}
+
+bool IsIdat(const uint8_t* data, size_t pos) { return std::memcmp(data + pos + 4, "IDAT", 4) == 0; }
+
+// Rewrites the CRC of every chunk that lies inside the buffer.
+void FixCrcs(uint8_t* data, size_t size) {
+  ForEachChunk(data, size, [&](size_t pos, size_t length) {
+    PutBe32(data + pos + 8 + length,
+            libdeflate_crc32(0, data + pos + 4, static_cast<uint32_t>(length) + 4));
+  });
 }
 
 // Inflates the IDATs, mutates the rows, deflates them again into a single IDAT chunk. Returns 0
 // when the input has no IDAT that inflates (the caller then mutates the file itself).
 size_t MutateRows(uint8_t* data, size_t size, size_t max_size) {
-  size_t pos = 8, first = 0, end = 0;
+  size_t first = 0, end = 0;
   std::vector<uint8_t> z;
-  while (size >= 12 && pos <= size - 12) {
-    const uint32_t length = Be32(data + pos);
-    if (length > size - pos - 12) return 0;
-    if (std::memcmp(data + pos + 4, "IDAT", 4) == 0) {
-      if (z.empty()) first = pos;
-      z.insert(z.end(), data + pos + 8, data + pos + 8 + length);
-      end = pos + 12 + length;
-    }
-    pos += 12 + static_cast<size_t>(length);
-  }
-  if (z.empty()) return 0;
+  const bool whole = ForEachChunk(data, size, [&](size_t pos, size_t length) {
+    if (!IsIdat(data, pos)) return;
+    if (z.empty()) first = pos;
+    z.insert(z.end(), data + pos + 8, data + pos + 8 + length);
+    end = pos + 12 + length;
+  });
+  if (!whole || z.empty()) return 0;
   std::vector<uint8_t> raw(1 << 20);
   size_t got = 0;
   libdeflate_decompressor* d = libdeflate_alloc_decompressor();
@@ -110,15 +119,9 @@ namespace {
 // Whether zlib (libpng's inflate) refuses the concatenated IDAT stream.
 bool ZlibRefusesIdat(const uint8_t* data, size_t size) {
   std::vector<uint8_t> z;
-  size_t pos = 8;
-  while (size >= 12 && pos <= size - 12) {
-    const uint32_t length = Be32(data + pos);
-    if (length > size - pos - 12) break;
-    if (std::memcmp(data + pos + 4, "IDAT", 4) == 0) {
-      z.insert(z.end(), data + pos + 8, data + pos + 8 + length);
-    }
-    pos += 12 + static_cast<size_t>(length);
-  }
+  ForEachChunk(data, size, [&](size_t pos, size_t length) {
+    if (IsIdat(data, pos)) z.insert(z.end(), data + pos + 8, data + pos + 8 + length);
+  });
   std::vector<uint8_t> out(std::max<size_t>(1, z.size() * 1100));
   uLongf out_size = out.size();
   return uncompress(out.data(), &out_size, z.data(), z.size()) != Z_OK;
