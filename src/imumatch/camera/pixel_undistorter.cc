@@ -81,4 +81,160 @@ Eigen::Vector2d PixelUndistorter::ToIdeal(const Eigen::Vector2d& uv,
   return camera_.NormalizedToIdeal(xy);
 }
 
+namespace {
+
+// The table's bilinear start and one Newton step for a run of points that all lie inside the
+// table (PixelUndistorter::ToIdeal written out, PinholeCamera::DistortNormalized inlined), over
+// arrays so that the compiler vectorises it for the instruction set of the caller (below).
+struct NewtonArgs {
+  double k1, k2, p1, p2, k3, fx, fy, cx, cy, origin, inv_cell;
+  int cols;
+  const double* table;  // node (c, r): table[2 * (r * cols + c)], x then y
+};
+[[gnu::always_inline]] inline void NewtonRun(const NewtonArgs& args, int n,
+                                             const double* __restrict us,
+                                             const double* __restrict vs, double* __restrict out_x,
+                                             double* __restrict out_y) {
+  // Parameters as locals: the compiler then knows the stores do not change them.
+  const double k1 = args.k1, k2 = args.k2, p1 = args.p1, p2 = args.p2, k3 = args.k3;
+  const double fx = args.fx, fy = args.fy, cx = args.cx, cy = args.cy;
+  const double origin = args.origin, inv_cell = args.inv_cell;
+  const int cols = args.cols;
+  const double* __restrict table = args.table;
+  for (int i = 0; i < n; ++i) {
+    const double u = us[i], v = vs[i];
+    const double gx = (u - origin) * inv_cell, gy = (v - origin) * inv_cell;
+    const int c = static_cast<int>(gx), r = static_cast<int>(gy);
+    const double ax = gx - c, ay = gy - r;
+    const int k = 2 * (r * cols + c), kn = k + 2 * cols;
+    double x = (1.0 - ay) * ((1.0 - ax) * table[k] + ax * table[k + 2]) +
+               ay * ((1.0 - ax) * table[kn] + ax * table[kn + 2]);
+    double y = (1.0 - ay) * ((1.0 - ax) * table[k + 1] + ax * table[k + 3]) +
+               ay * ((1.0 - ax) * table[kn + 1] + ax * table[kn + 3]);
+    const double tx = (u - cx) / fx, ty = (v - cy) / fy;
+    const double r2 = x * x + y * y;
+    const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+    const double dradial = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2);
+    const double j00 = radial + 2.0 * x * x * dradial + 2.0 * p1 * y + 6.0 * p2 * x;
+    const double j01 = 2.0 * x * y * dradial + 2.0 * p1 * x + 2.0 * p2 * y;
+    const double j11 = radial + 2.0 * y * y * dradial + 6.0 * p1 * y + 2.0 * p2 * x;
+    const double ex = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x) - tx;
+    const double ey = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y - ty;
+    const double inv_det = 1.0 / (j00 * j11 - j01 * j01);
+    x -= inv_det * (j11 * ex - j01 * ey);
+    y -= inv_det * (j00 * ey - j01 * ex);
+    out_x[i] = fx * x + cx;
+    out_y[i] = fy * y + cy;
+  }
+}
+using NewtonRunFn = void (*)(const NewtonArgs&, int, const double*, const double*, double*,
+                             double*);
+void NewtonRunPortable(const NewtonArgs& a, int n, const double* us, const double* vs,
+                       double* out_x, double* out_y) {
+  NewtonRun(a, n, us, vs, out_x, out_y);
+}
+#if defined(__x86_64__) || defined(__i386__)
+[[gnu::target("avx2,fma")]] void NewtonRunAvx2(const NewtonArgs& a, int n, const double* us,
+                                               const double* vs, double* out_x, double* out_y) {
+  NewtonRun(a, n, us, vs, out_x, out_y);
+}
+[[gnu::target("avx512f,avx512dq,avx512vl")]] void NewtonRunAvx512(const NewtonArgs& a, int n,
+                                                                  const double* us,
+                                                                  const double* vs, double* out_x,
+                                                                  double* out_y) {
+  NewtonRun(a, n, us, vs, out_x, out_y);
+}
+#endif
+bool CpuHas(PixelUndistorter::Path path) {
+  switch (path) {
+    case PixelUndistorter::Path::kAuto:
+    case PixelUndistorter::Path::kPortable:
+      return true;
+#if defined(__x86_64__) || defined(__i386__)
+    case PixelUndistorter::Path::kAvx2:
+      return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+    case PixelUndistorter::Path::kAvx512:
+      return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+             __builtin_cpu_supports("avx512vl");
+#else
+    default:
+      return false;
+#endif
+  }
+  return false;
+}
+NewtonRunFn SelectNewtonRun(PixelUndistorter::Path path) {
+  using Path = PixelUndistorter::Path;
+  if (path == Path::kAuto) {
+    path = CpuHas(Path::kAvx512) ? Path::kAvx512
+                                 : (CpuHas(Path::kAvx2) ? Path::kAvx2 : Path::kPortable);
+  }
+#if defined(__x86_64__) || defined(__i386__)
+  if (path == Path::kAvx512) return &NewtonRunAvx512;
+  if (path == Path::kAvx2) return &NewtonRunAvx2;
+#endif
+  return &NewtonRunPortable;
+}
+
+}  // namespace
+
+bool PixelUndistorter::Supported(Path path) { return CpuHas(path); }
+
+void PixelUndistorter::ToIdealInPlace(float* xy, int n, int stride, Path path) const {
+  IMUMATCH_CHECK(n >= 0 && stride >= 2, "n=" << n << " stride=" << stride);
+  IMUMATCH_CHECK(CpuHas(path), "this CPU lacks the instruction set of the requested path");
+  if (identity_ || n == 0) return;
+  static const NewtonRunFn best = SelectNewtonRun(Path::kAuto);
+  const NewtonRunFn newton_run = path == Path::kAuto ? best : SelectNewtonRun(path);
+  const auto& [k1, k2, p1, p2, k3] = camera_.distortion;
+  const NewtonArgs args{k1,
+                        k2,
+                        p1,
+                        p2,
+                        k3,
+                        camera_.fx,
+                        camera_.fy,
+                        camera_.cx,
+                        camera_.cy,
+                        origin_,
+                        inv_cell_,
+                        cols_,
+                        reinterpret_cast<const double*>(table_.data())};
+  static_assert(sizeof(Eigen::Vector2d) == 2 * sizeof(double));
+  const double last_col = cols_ - 1, last_row = rows_ - 1;
+  constexpr int kRun = 64;
+  double us[kRun], vs[kRun], out_x[kRun], out_y[kRun];
+  int outside[kRun];
+  double outside_u[kRun], outside_v[kRun];
+  for (int begin = 0; begin < n; begin += kRun) {
+    const int len = std::min(kRun, n - begin);
+    int num_outside = 0;
+    for (int i = 0; i < len; ++i) {
+      const float* p = xy + static_cast<size_t>(begin + i) * stride;
+      us[i] = p[0];
+      vs[i] = p[1];
+      const double gx = (us[i] - origin_) * inv_cell_, gy = (vs[i] - origin_) * inv_cell_;
+      if (!(gx >= 0.0 && gy >= 0.0 && gx < last_col && gy < last_row)) {
+        // (And NaN.) ToIdeal's path below; a node of the table meanwhile.
+        outside[num_outside] = i;
+        outside_u[num_outside] = us[i];
+        outside_v[num_outside++] = vs[i];
+        us[i] = vs[i] = origin_;
+      }
+    }
+    newton_run(args, len, us, vs, out_x, out_y);
+    for (int i = 0; i < len; ++i) {
+      float* p = xy + static_cast<size_t>(begin + i) * stride;
+      p[0] = static_cast<float>(out_x[i]);
+      p[1] = static_cast<float>(out_y[i]);
+    }
+    for (int o = 0; o < num_outside; ++o) {
+      float* p = xy + static_cast<size_t>(begin + outside[o]) * stride;
+      const Eigen::Vector2d ideal = ToIdeal(Eigen::Vector2d(outside_u[o], outside_v[o]));
+      p[0] = static_cast<float>(ideal.x());
+      p[1] = static_cast<float>(ideal.y());
+    }
+  }
+}
+
 }  // namespace imumatch

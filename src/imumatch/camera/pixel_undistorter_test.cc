@@ -1,6 +1,8 @@
 #include "imumatch/camera/pixel_undistorter.h"
 
 #include <cmath>
+#include <limits>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <Eigen/LU>
@@ -60,6 +62,54 @@ TEST(PixelUndistorter, AgreesWithTheForwardModelEverywhereInTheImage) {
   const Eigen::Vector2d outside(-5.0, 490.0);
   EXPECT_LT((cam.IdealToPixel(undistorter.ToIdeal(outside)) - outside).norm(), 1e-6);
   EXPECT_LT((undistorter.ToImage(undistorter.ToIdeal(outside)) - outside).norm(), 1e-6);
+}
+
+TEST(PixelUndistorter, InPlaceBatchEqualsToIdealOnEveryPath) {
+  using Path = PixelUndistorter::Path;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (const PinholeCamera& cam : {PinholeCamera::EurocCam0(), PinholeCamera::TumFreiburg1()}) {
+    const PixelUndistorter undistorter(cam);
+    // Points inside the image (a lattice that crosses the 64-point runs), a few outside the
+    // table (beyond the image, the iterative inverse) and NaN.
+    std::vector<Eigen::Vector2f> points;
+    for (float v = -0.5f; v < cam.height; v += 13.3f) {
+      for (float u = -0.5f; u < cam.width; u += 11.7f) points.emplace_back(u, v);
+    }
+    points.insert(points.begin() + 70, Eigen::Vector2f(-5.0f, 10.0f));
+    points.insert(points.begin() + 130, Eigen::Vector2f(cam.width + 3.0f, 200.0f));
+    points.insert(points.begin() + 131, Eigen::Vector2f(nan, 20.0f));
+    points.emplace_back(cam.width - 0.5f, cam.height - 0.5f);  // the last table node's edge
+    for (Path path : {Path::kAuto, Path::kPortable, Path::kAvx2, Path::kAvx512}) {
+      if (!PixelUndistorter::Supported(path)) continue;
+      for (int stride : {2, 5}) {
+        std::vector<float> xy(points.size() * stride, -7.0f);
+        for (size_t i = 0; i < points.size(); ++i) {
+          xy[i * stride] = points[i].x();
+          xy[i * stride + 1] = points[i].y();
+        }
+        undistorter.ToIdealInPlace(xy.data(), static_cast<int>(points.size()), stride, path);
+        for (size_t i = 0; i < points.size(); ++i) {
+          const Eigen::Vector2d want = undistorter.ToIdeal(points[i].cast<double>());
+          const Eigen::Vector2d got(xy[i * stride], xy[i * stride + 1]);
+          if (!want.allFinite()) {
+            EXPECT_FALSE(got.allFinite()) << i;
+            continue;
+          }
+          // Both in double, rounded to float: equal to a float's rounding (1 ulp near 800 px).
+          ASSERT_LT((got - want).cwiseAbs().maxCoeff(), 1.2e-4) << points[i].transpose();
+          // And the independent truth: the forward model maps it back (float rounding again).
+          ASSERT_LT((cam.IdealToPixel(got) - points[i].cast<double>()).norm(), 2e-4);
+          for (int k = 2; k < stride; ++k) EXPECT_EQ(xy[i * stride + k], -7.0f);  // untouched
+        }
+      }
+    }
+  }
+  // Without distortion nothing moves.
+  const PixelUndistorter identity(PinholeCamera::KinectDefault());
+  float xy[2] = {12.25f, 400.5f};
+  identity.ToIdealInPlace(xy, 1, 2);
+  EXPECT_EQ(xy[0], 12.25f);
+  EXPECT_EQ(xy[1], 400.5f);
 }
 
 TEST(PixelUndistorter, IsTheIdentityWithoutDistortion) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
 
 #include "imumatch/core/error.h"
 #include "imumatch/core/so3.h"
@@ -417,16 +418,16 @@ double KeypointSigmaScale(const PredictionOptions& options, const KeypointInfo& 
 void ToIdealKeypointInfos(const std::vector<cv::KeyPoint>& keypoints,
                           const PixelUndistorter& undistorter, std::vector<KeypointInfo>* out) {
   out->resize(keypoints.size());
-  const bool identity = undistorter.identity();
   for (size_t i = 0; i < keypoints.size(); ++i) {
     const cv::KeyPoint& k = keypoints[i];
-    KeypointInfo& info = (*out)[i];
-    info = KeypointInfo{k.pt.x, k.pt.y, k.angle, k.size, k.octave};
-    if (!identity) {
-      const Eigen::Vector2d ideal = undistorter.ToIdeal(Eigen::Vector2d(k.pt.x, k.pt.y));
-      info.x = static_cast<float>(ideal.x());
-      info.y = static_cast<float>(ideal.y());
-    }
+    (*out)[i] = KeypointInfo{k.pt.x, k.pt.y, k.angle, k.size, k.octave};
+  }
+  // The positions mapped in place, as the x, y members of the records.
+  static_assert(offsetof(KeypointInfo, y) == offsetof(KeypointInfo, x) + sizeof(float) &&
+                sizeof(KeypointInfo) % sizeof(float) == 0);
+  if (!out->empty()) {
+    undistorter.ToIdealInPlace(&out->front().x, static_cast<int>(out->size()),
+                               static_cast<int>(sizeof(KeypointInfo) / sizeof(float)));
   }
 }
 
