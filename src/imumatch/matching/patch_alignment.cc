@@ -3,44 +3,16 @@
 #include <cmath>
 #include <limits>
 
+#include "imumatch/matching/bilinear_sampling.h"
+
 namespace imumatch {
-namespace {
-
-// Bilinear sample of an 8-bit image at a point known to lie inside [0, cols-1) x [0, rows-1).
-inline float SampleUnchecked(const uint8_t* data, size_t step, float x, float y) {
-  const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
-  const float fx = x - static_cast<float>(x0), fy = y - static_cast<float>(y0);
-  const uint8_t* r0 = data + static_cast<size_t>(y0) * step + x0;
-  const uint8_t* r1 = r0 + step;
-  const float top = r0[0] + fx * (static_cast<float>(r0[1]) - r0[0]);
-  const float bottom = r1[0] + fx * (static_cast<float>(r1[1]) - r1[0]);
-  return top + fy * (bottom - top);
-}
-
-// Samples the w x h grid of unit steps whose first sample is at (x, y) (bilinear, one set of
-// weights for all samples), row-major into out. The grid must lie inside the image.
-inline void SampleGrid(const uint8_t* data, size_t step, float x, float y, int w, int h,
-                       float* out) {
-  const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
-  const float fx = x - static_cast<float>(x0), fy = y - static_cast<float>(y0);
-  const float w00 = (1.0f - fx) * (1.0f - fy), w01 = fx * (1.0f - fy);
-  const float w10 = (1.0f - fx) * fy, w11 = fx * fy;
-  for (int r = 0; r < h; ++r) {
-    const uint8_t* p = data + static_cast<size_t>(y0 + r) * step + x0;
-    const uint8_t* q = p + step;
-    float* o = out + static_cast<size_t>(r) * w;
-    for (int c = 0; c < w; ++c) {
-      o[c] = w00 * p[c] + w01 * p[c + 1] + w10 * q[c] + w11 * q[c + 1];
-    }
-  }
-}
-
-}  // namespace
 
 PatchTemplate::PatchTemplate(int max_half_size) : max_half_(max_half_size) {
   const size_t ext = static_cast<size_t>(2 * max_half_size + 3);
   const size_t side = ext - 2;
   ring_.resize(ext * ext);
+  xs_.resize(ext * ext);
+  ys_.resize(ext * ext);
   t_.resize(side * side);
   gx_.resize(side * side);
   gy_.resize(side * side);
@@ -71,14 +43,19 @@ AlignStatus PatchTemplate::Build(const cv::Mat& gray_a, const Eigen::Vector2f& k
   } else {
     // Row by row: the sample position moves by inv's first column along a row.
     const float dxc = inv(0, 0), dyc = inv(1, 0);
+    // The positions first, then all of them sampled in one call (vectorised).
     for (int r = 0; r < ext; ++r) {
       const float qy = static_cast<float>(r - h_ - 1);
       float x = ka.x() - reach * dxc + inv(0, 1) * qy;
       float y = ka.y() - reach * dyc + inv(1, 1) * qy;
-      float* out = ring + static_cast<size_t>(r) * ext;
-      for (int c = 0; c < ext; ++c, x += dxc, y += dyc)
-        out[c] = SampleUnchecked(data_a, step_a, x, y);
+      float* xs = xs_.data() + static_cast<size_t>(r) * ext;
+      float* ys = ys_.data() + static_cast<size_t>(r) * ext;
+      for (int c = 0; c < ext; ++c, x += dxc, y += dyc) {
+        xs[c] = x;
+        ys[c] = y;
+      }
     }
+    SamplePoints(data_a, step_a, gray_a.rows, xs_.data(), ys_.data(), ext * ext, ring);
   }
   // Normalised template statistics and its gradients (central differences, B's pixels). The
   // sums are vectorised (their order is not fixed).

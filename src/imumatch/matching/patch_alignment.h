@@ -57,7 +57,7 @@ class PatchTemplate {
  private:
   int max_half_;
   int h_ = 0;
-  std::vector<float> ring_, t_, gx_, gy_, target_;
+  std::vector<float> ring_, t_, gx_, gy_, target_, xs_, ys_;
   float h00_ = 0, h01_ = 0, h11_ = 0, gsum_x_ = 0, gsum_y_ = 0, gt_x_ = 0, gt_y_ = 0;
 };
 
