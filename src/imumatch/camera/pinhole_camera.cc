@@ -37,19 +37,10 @@ Eigen::Matrix3d PinholeCamera::K() const {
 
 Eigen::Vector2d PinholeCamera::DistortNormalized(const Eigen::Vector2d& xy,
                                                  Eigen::Matrix2d* jacobian) const {
-  const double x = xy.x(), y = xy.y();
   const auto& [k1, k2, p1, p2, k3] = distortion;
-  const double r2 = x * x + y * y;
-  const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
-  if (jacobian != nullptr) {
-    // d radial / d r2, and d r2 / dx = 2x, d r2 / dy = 2y.
-    const double dradial = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2);
-    const double cross = 2.0 * x * y * dradial + 2.0 * p1 * x + 2.0 * p2 * y;
-    (*jacobian) << radial + 2.0 * x * x * dradial + 2.0 * p1 * y + 6.0 * p2 * x, cross, cross,
-        radial + 2.0 * y * y * dradial + 6.0 * p1 * y + 2.0 * p2 * x;
-  }
-  return Eigen::Vector2d(x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x),
-                         y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y);
+  const RadTan e = EvalRadTan(k1, k2, p1, p2, k3, xy.x(), xy.y());
+  if (jacobian != nullptr) *jacobian << e.j00, e.j01, e.j01, e.j11;
+  return Eigen::Vector2d(e.dx, e.dy);
 }
 
 Eigen::Vector2d PinholeCamera::NormalizedToPixel(const Eigen::Vector2d& xy) const {

@@ -9,6 +9,29 @@
 
 namespace imumatch {
 
+// The radial-tangential model evaluated at a point (x, y) of the z=1 plane: the distorted point
+// (dx, dy) and the entries of its Jacobian d(dx, dy) / d(x, y) (j01 = j10). The one place the
+// model is written: PinholeCamera::DistortNormalized and PixelUndistorter's vectorised loop both
+// call it (always inlined, with the coefficients as scalars, so that unused entries cost nothing
+// and the vectorised loop keeps them in registers).
+struct RadTan {
+  double dx, dy, j00, j01, j11;
+};
+[[gnu::always_inline]] inline RadTan EvalRadTan(double k1, double k2, double p1, double p2,
+                                                double k3, double x, double y) {
+  const double r2 = x * x + y * y;
+  const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+  // d radial / d r2, and d r2 / dx = 2x, d r2 / dy = 2y.
+  const double dradial = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2);
+  RadTan e;
+  e.dx = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
+  e.dy = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
+  e.j00 = radial + 2.0 * x * x * dradial + 2.0 * p1 * y + 6.0 * p2 * x;
+  e.j01 = 2.0 * x * y * dradial + 2.0 * p1 * x + 2.0 * p2 * y;
+  e.j11 = radial + 2.0 * y * y * dradial + 6.0 * p1 * y + 2.0 * p2 * x;
+  return e;
+}
+
 // Pinhole camera with optional radial-tangential (OpenCV "plumb bob": k1 k2 p1 p2 k3) distortion
 // and a depth scale for 16-bit depth images.
 //

@@ -49,6 +49,23 @@ PixelUndistorter::PixelUndistorter(const PinholeCamera& camera, double cell_px) 
   }
 }
 
+namespace {
+
+// The table's bilinear interpolation at grid coordinates (gx, gy) inside it: the Newton step's
+// start. table: node (c, r) at table[2 * (r * cols + c)], x then y.
+[[gnu::always_inline]] inline void TableStart(const double* table, int cols, double gx, double gy,
+                                              double* x, double* y) {
+  const int c = static_cast<int>(gx), r = static_cast<int>(gy);
+  const double ax = gx - c, ay = gy - r;
+  const int k = 2 * (r * cols + c), kn = k + 2 * cols;
+  *x = (1.0 - ay) * ((1.0 - ax) * table[k] + ax * table[k + 2]) +
+       ay * ((1.0 - ax) * table[kn] + ax * table[kn + 2]);
+  *y = (1.0 - ay) * ((1.0 - ax) * table[k + 1] + ax * table[k + 3]) +
+       ay * ((1.0 - ax) * table[kn + 1] + ax * table[kn + 3]);
+}
+
+}  // namespace
+
 Eigen::Vector2d PixelUndistorter::ToIdeal(const Eigen::Vector2d& uv,
                                           Eigen::Matrix2d* ideal_from_pixel) const {
   if (identity_) {
@@ -58,12 +75,8 @@ Eigen::Vector2d PixelUndistorter::ToIdeal(const Eigen::Vector2d& uv,
   const double gx = (uv.x() - origin_) * inv_cell_, gy = (uv.y() - origin_) * inv_cell_;
   Eigen::Vector2d xy;
   if (gx >= 0.0 && gy >= 0.0 && gx < cols_ - 1 && gy < rows_ - 1) {
-    const int c = static_cast<int>(gx), r = static_cast<int>(gy);
-    const double fx = gx - c, fy = gy - r;
-    const Eigen::Vector2d* row0 = &table_[static_cast<size_t>(r) * cols_ + c];
-    const Eigen::Vector2d* row1 = row0 + cols_;
-    xy = (1.0 - fy) * ((1.0 - fx) * row0[0] + fx * row0[1]) +
-         fy * ((1.0 - fx) * row1[0] + fx * row1[1]);
+    static_assert(sizeof(Eigen::Vector2d) == 2 * sizeof(double));
+    TableStart(reinterpret_cast<const double*>(table_.data()), cols_, gx, gy, &xy.x(), &xy.y());
   } else {
     xy = camera_.PixelToNormalized(uv);  // outside the table (or NaN): the iterative inverse
   }
@@ -83,13 +96,13 @@ Eigen::Vector2d PixelUndistorter::ToIdeal(const Eigen::Vector2d& uv,
 
 namespace {
 
-// The table's bilinear start and one Newton step for a run of points that all lie inside the
-// table (PixelUndistorter::ToIdeal written out, PinholeCamera::DistortNormalized inlined), over
-// arrays so that the compiler vectorises it for the instruction set of the caller (below).
+// The table's start and one Newton step (ToIdeal's arithmetic) for a run of points that all lie
+// inside the table, over arrays so that the compiler vectorises it for the instruction set of
+// the caller (below).
 struct NewtonArgs {
   double k1, k2, p1, p2, k3, fx, fy, cx, cy, origin, inv_cell;
   int cols;
-  const double* table;  // node (c, r): table[2 * (r * cols + c)], x then y
+  const double* table;  // as TableStart takes it
 };
 [[gnu::always_inline]] inline void NewtonRun(const NewtonArgs& args, int n,
                                              const double* __restrict us,
@@ -103,26 +116,14 @@ struct NewtonArgs {
   const double* __restrict table = args.table;
   for (int i = 0; i < n; ++i) {
     const double u = us[i], v = vs[i];
-    const double gx = (u - origin) * inv_cell, gy = (v - origin) * inv_cell;
-    const int c = static_cast<int>(gx), r = static_cast<int>(gy);
-    const double ax = gx - c, ay = gy - r;
-    const int k = 2 * (r * cols + c), kn = k + 2 * cols;
-    double x = (1.0 - ay) * ((1.0 - ax) * table[k] + ax * table[k + 2]) +
-               ay * ((1.0 - ax) * table[kn] + ax * table[kn + 2]);
-    double y = (1.0 - ay) * ((1.0 - ax) * table[k + 1] + ax * table[k + 3]) +
-               ay * ((1.0 - ax) * table[kn + 1] + ax * table[kn + 3]);
+    double x, y;
+    TableStart(table, cols, (u - origin) * inv_cell, (v - origin) * inv_cell, &x, &y);
     const double tx = (u - cx) / fx, ty = (v - cy) / fy;
-    const double r2 = x * x + y * y;
-    const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
-    const double dradial = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2);
-    const double j00 = radial + 2.0 * x * x * dradial + 2.0 * p1 * y + 6.0 * p2 * x;
-    const double j01 = 2.0 * x * y * dradial + 2.0 * p1 * x + 2.0 * p2 * y;
-    const double j11 = radial + 2.0 * y * y * dradial + 6.0 * p1 * y + 2.0 * p2 * x;
-    const double ex = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x) - tx;
-    const double ey = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y - ty;
-    const double inv_det = 1.0 / (j00 * j11 - j01 * j01);
-    x -= inv_det * (j11 * ex - j01 * ey);
-    y -= inv_det * (j00 * ey - j01 * ex);
+    const RadTan e = EvalRadTan(k1, k2, p1, p2, k3, x, y);
+    const double ex = e.dx - tx, ey = e.dy - ty;
+    const double inv_det = 1.0 / (e.j00 * e.j11 - e.j01 * e.j01);
+    x -= inv_det * (e.j11 * ex - e.j01 * ey);
+    y -= inv_det * (e.j00 * ey - e.j01 * ex);
     out_x[i] = fx * x + cx;
     out_y[i] = fy * y + cy;
   }
@@ -200,7 +201,6 @@ void PixelUndistorter::ToIdealInPlace(float* xy, int n, int stride, Path path) c
                         inv_cell_,
                         cols_,
                         reinterpret_cast<const double*>(table_.data())};
-  static_assert(sizeof(Eigen::Vector2d) == 2 * sizeof(double));
   const double last_col = cols_ - 1, last_row = rows_ - 1;
   constexpr int kRun = 64;
   double us[kRun], vs[kRun], out_x[kRun], out_y[kRun];
