@@ -364,6 +364,10 @@ metre) or as metres per keypoint (<= 0 or NaN: none). Without depth: the epipola
                      "Largest move from the keypoint (px); farther = not aligned.")
       .def_readwrite("min_texture", &SubpixelOptions::min_texture,
                      "Smallest gradient texture of the patch.")
+      .def_readwrite("retry_drifted_larger", &SubpixelOptions::retry_drifted_larger,
+                     "Retry a drifting alignment with the patch twice the size.")
+      .def_readwrite("retry_min_correlation", &SubpixelOptions::retry_min_correlation,
+                     "Smallest ZNCC for the larger patch's retry to count.")
       .def_readwrite("drop_unaligned", &SubpixelOptions::drop_unaligned,
                      "Drop matches that cannot be aligned.")
       .def("check", &SubpixelOptions::Check,
@@ -449,6 +453,7 @@ metre) or as metres per keypoint (<= 0 or NaN: none). Without depth: the epipola
             d["failed_border"] = r.refine_stats.failed_border;
             d["failed_texture"] = r.refine_stats.failed_texture;
             d["failed_convergence"] = r.refine_stats.failed_convergence;
+            d["recovered_larger"] = r.refine_stats.recovered_larger;
             return d;
           },
           "Guided with images: how many matches were refined, and why the others failed.");

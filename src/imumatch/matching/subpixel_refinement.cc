@@ -19,6 +19,8 @@ void SubpixelOptions::Check() const {
   IMUMATCH_CHECK(std::isfinite(max_shift_px) && max_shift_px > 0.0,
                  "max_shift_px=" << max_shift_px);
   IMUMATCH_CHECK(std::isfinite(min_texture) && min_texture >= 0.0, "min_texture=" << min_texture);
+  IMUMATCH_CHECK(retry_min_correlation >= -1.0 && retry_min_correlation <= 1.0,
+                 "retry_min_correlation=" << retry_min_correlation);
 }
 
 namespace {
@@ -88,14 +90,26 @@ SubpixelStats RefineMatches(const cv::Mat& gray_a, const cv::Mat& gray_b,
     }
     const Eigen::Matrix2f inv = affine.inverse();  // B offset -> A offset
     // A flat patch (the centre of a blob: SURF, AKAZE) is tried again at twice the size, where
-    // the blob's edges give it texture.
+    // the blob's edges give it texture. So is a patch that drifted (no convergence, or farther
+    // than max_shift_px): 9 x 9 samples of a repetitive or edge-like neighbourhood can slide
+    // along it, four times the samples pin the position. A second chance must show its patch:
+    // the larger patch must align within max_shift_px and correlate (ZNCC) at least
+    // retry_min_correlation there, else the match stays unaligned.
     Eigen::Vector2f xy;
     const Eigen::Vector2f pa(ka.pt.x, ka.pt.y), pb(kb.pt.x, kb.pt.y);
     AlignStatus r = AlignPatch(tpl, gray_a, gray_b, pa, pb, inv, options.half_size, options, &xy,
                                &stats.iterations);
-    if (r == AlignStatus::kTexture) {
+    const bool drifted = r == AlignStatus::kNoConvergence ||
+                         (r == AlignStatus::kAligned && (xy - pb).squaredNorm() > max_shift2);
+    if (r == AlignStatus::kTexture || (drifted && options.retry_drifted_larger)) {
       r = AlignPatch(tpl, gray_a, gray_b, pa, pb, inv, 2 * options.half_size, options, &xy,
                      &stats.iterations);
+      if (drifted) {
+        const bool shown = r == AlignStatus::kAligned && (xy - pb).squaredNorm() <= max_shift2 &&
+                           tpl.Correlation(gray_b, xy) >= options.retry_min_correlation;
+        r = shown ? AlignStatus::kAligned : AlignStatus::kNoConvergence;
+        stats.recovered_larger += shown ? 1 : 0;
+      }
     }
     if (r == AlignStatus::kBorder) {
       ++stats.failed_border;

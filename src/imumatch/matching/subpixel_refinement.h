@@ -44,6 +44,13 @@ struct SubpixelOptions {
   // The patch must have texture in both directions: the smaller eigenvalue of the normalised
   // template's gradient Hessian per sample (a unit-variance patch of pure noise gives about 1).
   double min_texture = 0.02;
+  // An alignment that drifts (no convergence, or beyond max_shift_px) is tried again with the
+  // patch twice the size, and counts only when that one aligns within max_shift_px with a
+  // zero-normalised cross-correlation of at least retry_min_correlation (the KLT tracker's
+  // track criterion). On EuRoC MH_05 (all 199 pairs, six detectors) it kept 0.3-1.0 % more
+  // correct matches; of the matches it added on the frames with depth, 78-94 % are correct.
+  bool retry_drifted_larger = true;
+  double retry_min_correlation = 0.8;
   // Drop the matches whose alignment did not converge within max_shift_px: A's patch is
   // not found near B's keypoint, a photometric sign of a false match. Matches left unrefined for
   // lack of texture or at the image border are kept.
@@ -56,6 +63,7 @@ struct SubpixelStats {
   int failed_border = 0;
   int failed_texture = 0;
   int failed_convergence = 0;  // no convergence, or shifted too far (dropped: drop_unaligned)
+  int recovered_larger = 0;    // drifted at half_size, aligned by the larger patch (in refined)
   int64_t iterations = 0;      // Gauss-Newton steps over all matches
 };
 

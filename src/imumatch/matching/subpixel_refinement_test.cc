@@ -78,10 +78,10 @@ PinholeCamera Camera() {
 double MeanError(const MatchSet& s, int* refined) {
   double sum = 0.0;
   *refined = 0;
-  for (size_t i = 0; i < s.matches.size(); ++i) {
-    if (!s.matches[i].refined_uv_b.allFinite()) continue;
+  for (const Match& m : s.matches) {  // dropped matches leave the list: truth by query index
+    if (!m.refined_uv_b.allFinite()) continue;
     ++*refined;
-    sum += (s.matches[i].refined_uv_b.cast<double>() - s.truth[i]).norm();
+    sum += (m.refined_uv_b.cast<double>() - s.truth[static_cast<size_t>(m.query_idx)]).norm();
   }
   return *refined > 0 ? sum / *refined : 1e9;
 }
@@ -163,6 +163,56 @@ TEST(SubpixelRefinement, APatchWithoutTextureIsRetriedLarger) {
   std::vector<Match> again(1);
   again[0].query_idx = again[0].train_idx = 0;
   EXPECT_EQ(RefineMatches(a, w.b, kps_a, kps_b, {}, Camera(), small, again).failed_texture, 1);
+}
+
+TEST(SubpixelRefinement, ADriftingPatchIsRetriedLargerAndMustCorrelate) {
+  // B's keypoints at A's positions, 3.5 px from their true partners (B = A moved by (3, -1.8)):
+  // from that far some 9 x 9 patches slide off (4 of the 96 with this texture); the 17 x 17 patch
+  // aligns them on the truth.
+  const cv::Mat a = Texture(2);
+  const Warped w = Warp(a, 0.0, 1.0, Eigen::Vector2d(3.0, -1.8));
+  MatchSet with = MakeMatches(w);
+  for (size_t i = 0; i < with.kps_b.size(); ++i) with.kps_b[i].pt = with.kps_a[i].pt;
+  MatchSet without = with;
+  SubpixelOptions no_retry;
+  no_retry.retry_drifted_larger = false;
+  const SubpixelStats s_without =
+      RefineMatches(a, w.b, without.kps_a, without.kps_b, {}, Camera(), no_retry, without.matches);
+  const SubpixelStats s_with =
+      RefineMatches(a, w.b, with.kps_a, with.kps_b, {}, Camera(), SubpixelOptions(), with.matches);
+  const int n = static_cast<int>(with.truth.size());
+  ASSERT_GE(s_without.failed_convergence, 1);
+  EXPECT_EQ(static_cast<int>(without.matches.size()), n - s_without.failed_convergence);
+  EXPECT_EQ(s_without.recovered_larger, 0);
+  EXPECT_EQ(s_with.recovered_larger, s_without.failed_convergence);
+  EXPECT_EQ(s_with.failed_convergence, 0);
+  ASSERT_EQ(static_cast<int>(with.matches.size()), n);
+  int refined = 0;
+  EXPECT_LT(MeanError(with, &refined), 0.06);
+  EXPECT_EQ(refined, n);
+  for (const Match& m : with.matches) {  // within half a pixel of the truth, from 3.5 px away
+    EXPECT_LT((m.refined_uv_b.cast<double>() - with.truth[static_cast<size_t>(m.query_idx)]).norm(),
+              0.5)
+        << "query " << m.query_idx;
+  }
+
+  // False partners, 20 px away from the truth: the larger patch gives them no second chance
+  // (the same matches survive as without the retry).
+  MatchSet wrong = MakeMatches(w);
+  for (cv::KeyPoint& kb : wrong.kps_b) kb.pt += cv::Point2f(20.0f, 0.0f);
+  MatchSet wrong_without = wrong;
+  const SubpixelStats s_wrong = RefineMatches(a, w.b, wrong.kps_a, wrong.kps_b, {}, Camera(),
+                                              SubpixelOptions(), wrong.matches);
+  const SubpixelStats s_wrong_without =
+      RefineMatches(a, w.b, wrong_without.kps_a, wrong_without.kps_b, {}, Camera(), no_retry,
+                    wrong_without.matches);
+  EXPECT_GT(s_wrong.failed_convergence, n / 2);
+  EXPECT_EQ(s_wrong.recovered_larger, 0);
+  EXPECT_EQ(s_wrong.failed_convergence, s_wrong_without.failed_convergence);
+  EXPECT_EQ(wrong.matches.size(), wrong_without.matches.size());
+  SubpixelOptions bad;
+  bad.retry_min_correlation = 1.5;
+  EXPECT_THROW(bad.Check(), InvalidArgument);
 }
 
 TEST(SubpixelRefinement, FlatPatchesAndBordersAreLeftUnrefined) {
