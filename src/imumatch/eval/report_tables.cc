@@ -295,6 +295,45 @@ std::string MarkdownSecondPassTable(const std::vector<DetectorPairRecord>& recor
   return out.str();
 }
 
+// The sub-pixel refinement per case, detector and method, mean per pair: matches aligned (and of
+// them, those a drifting 9 x 9 patch only aligned at twice the size), left unrefined for lack of
+// texture or at the border, dropped because A's patch was not found near B's keypoint. Empty
+// when no run was refined.
+std::string MarkdownRefinementTable(const std::vector<DetectorPairRecord>& records) {
+  struct Acc {
+    int pairs = 0;
+    double refined = 0, recovered = 0, flat = 0, border = 0, dropped = 0, iterations = 0;
+  };
+  RunTable<Acc> table;
+  for (const auto& r : records) {
+    for (const auto& run : r.runs) {
+      const SubpixelStats& st = run.refine_stats;
+      if (st.refined + st.failed_texture + st.failed_border + st.failed_convergence == 0) continue;
+      Acc& a = table.At(r, run);
+      ++a.pairs;
+      a.refined += st.refined;
+      a.recovered += st.recovered_larger;
+      a.flat += st.failed_texture;
+      a.border += st.failed_border;
+      a.dropped += st.failed_convergence;
+      a.iterations += static_cast<double>(st.iterations);
+    }
+  }
+  if (table.empty()) return "";
+  std::ostringstream out;
+  out << "| Case | Detector | Method | pairs | aligned | of them by the larger patch after a drift "
+         "| unrefined: flat / border | dropped: not aligned within the shift | Gauss-Newton steps "
+         "per aligned match |\n|---|---|---|---:|---:|---:|---:|---:|---:|\n";
+  table.Write(out, [](std::ostream& o, const Acc& a) {
+    const double n = a.pairs;
+    o << a.pairs << " | " << FormatFixed(a.refined / n, 1) << " | "
+      << FormatFixed(a.recovered / n, 1) << " | " << FormatFixed(a.flat / n, 1) << " / "
+      << FormatFixed(a.border / n, 1) << " | " << FormatFixed(a.dropped / n, 1) << " | "
+      << (a.refined > 0 ? FormatFixed(a.iterations / a.refined, 1) : std::string("-")) << " |\n";
+  });
+  return out.str();
+}
+
 std::string MarkdownMotionErrorTable(const std::vector<DetectorPairRecord>& records) {
   std::map<std::string, std::vector<double>> rot, trans;
   std::vector<std::string> order;

@@ -36,6 +36,10 @@ std::string MarkdownSceneNearTable(const std::vector<DetectorPairRecord>& record
 // The guided method's second pass (motion fitted to the first pass): pairs where it ran, why it
 // did not, the fit's residual, the windows before and after. Empty when it was never tried.
 std::string MarkdownSecondPassTable(const std::vector<DetectorPairRecord>& records);
+// The sub-pixel refinement (RefineMatches) per case, detector and method, mean per pair: aligned
+// (and by the larger patch after a drift), unrefined (flat / border), dropped. Empty when no run
+// was refined.
+std::string MarkdownRefinementTable(const std::vector<DetectorPairRecord>& records);
 // How the tracks of the tracking methods (klt0, klt, hybrid) ended, mean per pair; "" when no
 // record has a tracking run.
 std::string MarkdownTrackingTable(const std::vector<DetectorPairRecord>& records);

@@ -45,6 +45,14 @@ EvaluationResult HandMadeResult() {
                         {ResidualKind::kDepth, 0.3f},
                         {ResidualKind::kDepth, 0.4f},
                         {ResidualKind::kEpipolar, 0.1f}};
+    // Refinement outcomes of 6 and 4 matches, leaving the 4 above: pair 0 aligned 3 (1 by the
+    // larger patch), 1 flat, 2 dropped; pair 1 aligned 3, 1 at the border.
+    guided.refine_stats.refined = 3;
+    guided.refine_stats.recovered_larger = pair == 0 ? 1 : 0;
+    guided.refine_stats.failed_texture = pair == 0 ? 1 : 0;
+    guided.refine_stats.failed_border = pair == 0 ? 0 : 1;
+    guided.refine_stats.failed_convergence = pair == 0 ? 2 : 0;
+    guided.refine_stats.iterations = pair == 0 ? 12 : 20;
     r.runs = {bf, guided};
     result.records.push_back(r);
   }
@@ -107,6 +115,14 @@ TEST(ReportTest, MarkdownTablesHaveTheSeedShape) {
   EXPECT_NE(report.find("Table I"), std::string::npos);
   EXPECT_NE(report.find("Table II"), std::string::npos);
   EXPECT_NE(report.find("IMU interval not available"), std::string::npos);
+  // Means per pair: aligned (3 + 3) / 2, by the larger patch 1 / 2, flat 1 / 2, border 1 / 2,
+  // dropped 2 / 2, steps (12 + 20) / 6 aligned; brute force has no row.
+  const std::string refine = MarkdownRefinementTable(HandMadeResult().records);
+  EXPECT_NE(refine.find("| front,1m | orb | IMU-guided | 2 | 3.0 | 0.5 | 0.5 / 0.5 | 1.0 | 5.3 |"),
+            std::string::npos)
+      << refine;
+  EXPECT_EQ(refine.find("BF knn"), std::string::npos) << refine;
+  EXPECT_NE(report.find("## Sub-pixel refinement"), std::string::npos);
   const std::string thr = MarkdownThresholdTable(HandMadeResult().records, {1.0, 10.0});
   EXPECT_NE(thr.find("| orb | BF knn+ratio (OpenCV) | 0.667 | 1.000 |"), std::string::npos) << thr;
 }
@@ -146,6 +162,17 @@ TEST(ReportTest, JsonRoundTrip) {
   EXPECT_DOUBLE_EQ(j["summary"][1]["correct"].get<double>(), 4.0);
   EXPECT_EQ(j["pairs"].size(), 4u);
   EXPECT_EQ(j["pairs"][0]["case"], "front,1m");
+  int with_refinement = 0;
+  for (const auto& p : j["pairs"]) {
+    if (!p.contains("refinement")) continue;
+    ++with_refinement;
+    EXPECT_EQ(p["method"], "guided");
+    // The matches that stayed (4 per run) were aligned or left unrefined.
+    EXPECT_EQ(p["refinement"]["aligned"].get<int>() + p["refinement"]["unrefined_flat"].get<int>() +
+                  p["refinement"]["unrefined_border"].get<int>(),
+              p["matches"].get<int>());
+  }
+  EXPECT_EQ(with_refinement, 2);
   EXPECT_EQ(j["skipped"].size(), 1u);
   EXPECT_EQ(j["config"]["detectors"], "orb");
   EXPECT_TRUE(j["end_to_end"].is_null());
