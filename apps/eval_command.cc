@@ -59,6 +59,7 @@ struct CommonArgs {
   bool fixed_segments = false;
   bool no_refine = false;
   bool single_pass = false;
+  bool fixed_gyro_bias = false;
   double guided_ratio = -1.0;           // < 0: --ratio
   double orientation_tolerance = -1.0;  // < 0: GuidedMatcherOptions default
   double still_s = 1.0;
@@ -122,6 +123,9 @@ void AddCommonOptions(CLI::App* cmd, CommonArgs& a) {
                   "orientation check)");
   cmd->add_flag("--no-refine", a.no_refine,
                 "guided: do not refine matched positions to sub-pixel accuracy");
+  cmd->add_flag("--fixed-gyro-bias", a.fixed_gyro_bias,
+                "recorded IMU: keep the still start's gyro bias (do not learn it from the guided "
+                "pairs' fitted rotations)");
   cmd->add_flag("--single-pass", a.single_pass,
                 "guided: match once with the IMU's windows (no second pass with the motion fitted "
                 "to the first pass's matches)");
@@ -173,6 +177,7 @@ EvaluationOptions MakeOptions(const CommonArgs& a) {
   o.prediction.scene_near.enabled = !a.fixed_segments;
   o.refine_subpixel = !a.no_refine;
   o.second_pass = !a.single_pass;
+  o.gyro_bias_from_matches = !a.fixed_gyro_bias;
   if (a.orientation_tolerance >= 0.0) o.guided.orientation_tolerance_deg = a.orientation_tolerance;
   if (a.sigma_scaling == "none") {
     o.prediction.sigma_scaling = KeypointSigmaScaling::kNone;

@@ -7,6 +7,7 @@
 #include <iomanip>
 #include <map>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <utility>
 
@@ -409,6 +410,10 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
     bias = EstimateImuBias(dataset, options.still_init_s);
     if (!bias.note.empty()) result.notes.push_back(name + ": " + bias.note);
   }
+  // One gyro bias filter per detector (each detector a front end of its own), on a recorded IMU.
+  const bool learn_bias = options.motion_source == MotionSource::kImu && !dataset.imu.empty() &&
+                          !dataset.imu_simulated && options.gyro_bias_from_matches;
+  std::vector<std::optional<GyroBiasFilter>> bias_filters(options.detectors.size());
   const PixelUndistorter undistorter(dataset.camera);
   const auto wall0 = Clock::now();
   std::vector<CachedFeatures> cache;  // features of the previous pair's frame B
@@ -453,7 +458,8 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
       item.b.image = gained;
     }
     std::vector<CachedFeatures> next_cache;
-    for (DetectorKind kind : options.detectors) {
+    for (size_t detector = 0; detector < options.detectors.size(); ++detector) {
+      const DetectorKind kind = options.detectors[detector];
       FeatureOptions fopts = options.features;
       fopts.kind = kind;
       auto extract = [&](size_t frame, const cv::Mat& image) {
@@ -499,12 +505,34 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
       rec.keypoints_a_with_depth = judge.num_with_depth();
       rec.read_ms = item.read_ms;
       rec.extract_ms = ca.ms + cb.ms;
-      rec.motion_ms = motion->ms;
-      rec.motion_rotation_error_deg =
-          RotationDistance(motion->motion.cam_b_from_cam_a.rotation, gt.cam_b_from_cam_a.rotation) *
-          180.0 / M_PI;
+      // The detector's own bias: the IMU's motion with it removed and its sigma.
+      std::optional<PairMotion> own_motion;
+      std::optional<GyroBiasFilter>& bias_filter = bias_filters[detector];
+      if (learn_bias) {
+        if (!bias_filter) {
+          bias_filter.emplace(bias.from_still_start ? bias.bias.gyro : Eigen::Vector3d::Zero(),
+                              bias.from_still_start ? bias.gyro_bias_sigma
+                                                    : options.gyro_bias_filter.unknown_bias_sigma,
+                              dataset.imu_params.gyro_random_walk,
+                              bias.from_still_start ? bias.t_ns : fa.t_ns,
+                              options.gyro_bias_filter);
+        }
+        ImuBiasEstimate learnt;
+        learnt.bias.gyro = bias_filter->bias();
+        learnt.from_still_start = true;  // an estimate with a sigma at t_ns
+        learnt.gyro_bias_sigma = bias_filter->SigmaAt(fa.t_ns);
+        learnt.t_ns = fa.t_ns;
+        std::string why;
+        own_motion = ComputePairMotion(dataset, pair, index, options, learnt, why);
+      }
+      const PairMotion& pair_motion = own_motion ? *own_motion : *motion;
+      rec.motion_ms = pair_motion.ms;
+      rec.motion_rotation_error_deg = RotationDistance(pair_motion.motion.cam_b_from_cam_a.rotation,
+                                                       gt.cam_b_from_cam_a.rotation) *
+                                      180.0 / M_PI;
       rec.motion_translation_error_m =
-          (motion->motion.cam_b_from_cam_a.translation - gt.cam_b_from_cam_a.translation).norm();
+          (pair_motion.motion.cam_b_from_cam_a.translation - gt.cam_b_from_cam_a.translation)
+              .norm();
       rec.candidates = judge.candidates();
       PairVisual visual;
       const bool keep_visual = static_cast<int>(index) < options.keep_visuals;
@@ -526,8 +554,21 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
       std::vector<std::vector<Match>> run_matches(options.methods.size());
       for (size_t m = 0; m < options.methods.size(); ++m) {
         const MatchMethod method = options.methods[m];
-        MethodRun run = RunMethod(method, undistorter, motion->motion, ca, cb, item.a, item.b,
+        MethodRun run = RunMethod(method, undistorter, pair_motion.motion, ca, cb, item.a, item.b,
                                   options, matches, predictions);
+        if (bias_filter && method == MatchMethod::kGuided) {
+          // The rotation the fitted motion's matches measure updates the detector's bias.
+          const std::optional<ImuRotationMeasurement> measured =
+              ImuRotationFromFit(run.refit, dataset.cam_from_imu);
+          if (measured) {
+            try {
+              bias_filter->Update(dataset.imu.Slice(fa.t_ns, fb.t_ns), dataset.imu_params,
+                                  measured->imu_a_from_imu_b, measured->covariance);
+            } catch (const Error&) {
+              // An interval the filter cannot use (e.g. before its last update): skipped.
+            }
+          }
+        }
         run.residuals = judge.Judge(matches);
         if (run.refit.ok) {
           const Rigid3d& fitted = run.refit.motion.cam_b_from_cam_a;
@@ -569,6 +610,18 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
   RunPipelined<PairItem>(
       pairs.size(), options.queue_capacity, [&](size_t i) { return pair_reader(i); }, process);
   result.wall_s = std::chrono::duration<double>(Clock::now() - wall0).count();
+  for (size_t d = 0; d < bias_filters.size(); ++d) {
+    if (!bias_filters[d]) continue;
+    const GyroBiasFilter& f = *bias_filters[d];
+    std::ostringstream note;
+    note << std::scientific << std::setprecision(2) << name << ": "
+         << ToString(options.detectors[d])
+         << ": gyro bias learnt from the guided pairs' fitted rotations: " << f.bias().x() << " "
+         << f.bias().y() << " " << f.bias().z() << " rad/s (+- "
+         << f.SigmaAt(dataset.frames[pairs.back().b].t_ns) << "), " << f.updates() << " updates, "
+         << f.rejected() << " rejected by the gate";
+    result.notes.push_back(note.str());
+  }
   for (const std::string& w : dataset.warnings) result.warnings.push_back(name + ": " + w);
   for (std::string& w : CheckInputsLookRight(
            result.records, !dataset.imu_simulated && options.motion_source == MotionSource::kImu)) {

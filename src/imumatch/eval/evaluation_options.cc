@@ -112,6 +112,7 @@ void EvaluationOptions::Check() const {
   prediction.Check();
   guided.Check();
   subpixel.Check();
+  gyro_bias_filter.Check();
   klt.Check();
   klt_unseeded.Check();
   IMUMATCH_CHECK(std::isfinite(gain_b) && gain_b > 0.0 && gain_b <= 100.0, "gain_b = " << gain_b);

@@ -10,6 +10,7 @@
 #include "imumatch/features/feature_factory.h"
 #include "imumatch/frontend/motion_refit.h"
 #include "imumatch/imu/camera_motion.h"
+#include "imumatch/imu/gyro_bias_filter.h"
 #include "imumatch/matching/guided_matcher.h"
 #include "imumatch/matching/klt_tracker.h"
 #include "imumatch/matching/predictor.h"
@@ -66,6 +67,13 @@ struct EvaluationOptions {
   // Gyro bias from the first still_init_s seconds of a recorded IMU log (see EstimateImuBias);
   // 0 integrates without a bias estimate.
   double still_init_s = 1.0;
+  // Recorded IMU: each detector keeps a gyro bias filter (GyroBiasFilter), started from the still
+  // start's estimate (or from zero with gyro_bias_filter.unknown_bias_sigma when the log does not
+  // start still) and fed with the rotation each guided pair's fitted motion measures
+  // (ImuRotationFromFit), as a visual-inertial estimator keeps its bias; the next pair's IMU
+  // motion removes that bias and is told its sigma. false: the still start's bias throughout.
+  bool gyro_bias_from_matches = true;
+  GyroBiasFilterOptions gyro_bias_filter;
 
   PredictionOptions prediction;
   GuidedMatcherOptions guided;

@@ -1,9 +1,11 @@
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
 #include "imumatch/camera/pixel_undistorter.h"
@@ -54,7 +56,26 @@ struct MotionRefit {
   double sigma_px = 0.0;      // the residuals' robust sigma (ideal px)
   double mahalanobis2 = 0.0;  // of the fit from the prior
   CameraMotion motion;
+  // The rotation cam_b_from_cam_a that the matches alone measure (without the prior's rotation,
+  // with its translation: see ImuRotationFromFit) and its covariance (3x3, left perturbation as
+  // CameraMotion's); set when ok and that solve converged.
+  bool rotation_from_matches_ok = false;
+  Eigen::Quaterniond rotation_from_matches = Eigen::Quaterniond::Identity();
+  Eigen::Matrix3d rotation_from_matches_covariance = Eigen::Matrix3d::Zero();
 };
+
+// The rotation of the IMU between the pair's frames that a fit's matches measure, for a gyro bias
+// filter (GyroBiasFilter::Update): MotionRefit::rotation_from_matches, the matches' residuals
+// minimised with the prior's translation information only (the prior's rotation is the gyro's,
+// which the filter has already; the epipolar residuals do not see the translation's length),
+// expressed for the IMU through cam_from_imu: imu_a_from_imu_b and its covariance (right
+// perturbation). nullopt when the fit is not ok or that solve did not converge.
+struct ImuRotationMeasurement {
+  Eigen::Quaterniond imu_a_from_imu_b = Eigen::Quaterniond::Identity();
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+};
+std::optional<ImuRotationMeasurement> ImuRotationFromFit(const MotionRefit& refit,
+                                                         const Rigid3d& cam_from_imu);
 
 // Where a correspondence ends in B (image pixels): the refined position or the track's, else the
 // matched keypoint.
