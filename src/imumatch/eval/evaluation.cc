@@ -207,6 +207,9 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
   const bool learn_bias = options.motion_source == MotionSource::kImu && !dataset.imu.empty() &&
                           !dataset.imu_simulated && options.gyro_bias_from_matches;
   std::vector<std::optional<GyroBiasFilter>> bias_filters(options.detectors.size());
+  // The fit's rotation measurement is a second solve: only when a filter reads it.
+  EvaluationOptions run_options = options;
+  run_options.refit.measure_rotation = learn_bias;
   const PixelUndistorter undistorter(dataset.camera);
   const auto wall0 = Clock::now();
   std::vector<CachedFeatures> cache;  // features of the previous pair's frame B
@@ -312,7 +315,7 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
         }
         ImuBiasEstimate learnt;
         learnt.bias.gyro = bias_filter->bias();
-        learnt.from_still_start = true;  // an estimate with a sigma at t_ns
+        learnt.estimated = true;
         learnt.gyro_bias_sigma = bias_filter->SigmaAt(fa.t_ns);
         learnt.t_ns = fa.t_ns;
         std::string why;
@@ -348,7 +351,7 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
       for (size_t m = 0; m < options.methods.size(); ++m) {
         const MatchMethod method = options.methods[m];
         MethodRun run = RunMethod(method, undistorter, pair_motion.motion, ca, cb, item.a, item.b,
-                                  options, matches, predictions);
+                                  run_options, matches, predictions);
         if (bias_filter && method == MatchMethod::kGuided) {
           // The rotation the fitted motion's matches measure updates the detector's bias.
           const std::optional<ImuRotationMeasurement> measured =

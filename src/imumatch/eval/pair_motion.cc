@@ -48,6 +48,7 @@ ImuBiasEstimate EstimateImuBias(const Dataset& dataset, double still_s) {
     const StillInitialization init = InitializeFromStill(dataset.imu, t0, t1, dataset.imu_params);
     out.bias = init.bias;
     out.from_still_start = true;
+    out.estimated = true;
     out.gyro_bias_sigma = init.gyro_bias_sigma;
     out.t_ns = t1;
     note << "IMU gyro bias from the still start of the log (" << init.num_samples
@@ -100,7 +101,7 @@ std::optional<PairMotion> ComputePairMotion(const Dataset& dataset, const FrameP
       *velocity + v_sigma * Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
   state.bias = bias.bias;
   CameraMotionOptions motion_options = options.motion;
-  if (bias.from_still_start) {
+  if (bias.estimated) {
     const double since_s = std::max(0.0, NsToSeconds(fa.t_ns - bias.t_ns));
     const double walk = dataset.imu_params.gyro_random_walk;
     motion_options.gyro_bias_sigma =

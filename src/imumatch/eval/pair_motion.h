@@ -27,6 +27,9 @@ std::optional<Eigen::Vector3d> ImuVelocityAt(const Dataset& dataset, size_t inde
 struct ImuBiasEstimate {
   ImuBias bias;
   bool from_still_start = false;
+  // bias.gyro and gyro_bias_sigma hold an estimate at t_ns (from the still start, or learnt from
+  // the matches): the sigma the predictor is told grows from there by the gyro random walk.
+  bool estimated = false;
   double gyro_bias_sigma = 0.0;  // standard error of the estimate (rad/s)
   int64_t t_ns = 0;              // end of the still period: the bias then walks (random walk)
   std::string note;              // one line for the report
@@ -42,7 +45,7 @@ struct PairMotion {
 // The motion the predictor is given for a frame pair, or nullopt with a skip reason: the exact
 // ground-truth motion (MotionSource::kGroundTruth), or the dataset's IMU integrated from the state
 // at frame A (the ground truth perturbed by the stated sigmas, seeded with seed + pair index) with
-// the estimated bias removed. With a bias from the still start, the gyro bias sigma the predictor
+// the estimated bias removed. With an estimated bias (estimated), the gyro bias sigma the predictor
 // is told is the estimate's standard error grown by the gyro random walk since then,
 // sqrt(sigma^2 + gyro_random_walk^2 (t_a - t_still)), instead of options.motion.gyro_bias_sigma.
 std::optional<PairMotion> ComputePairMotion(const Dataset& dataset, const FramePair& pair,

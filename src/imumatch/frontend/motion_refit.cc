@@ -232,6 +232,10 @@ MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& mat
   // Reweighting every step converges only linearly (about halving the error per step on MH_05),
   // so the sigma and the weights are kept once the sigma settles (or after
   // options.reweight_steps): Gauss-Newton on the fixed weighted problem then converges in a few.
+  // Cauchy weight of a row at squared scale c2 (per residual row).
+  auto cauchy_weight = [](const Row& row, double c2) {
+    return 1.0 / (1.0 + row.e.squaredNorm() / (row.rows * c2));
+  };
   std::vector<Row> rs(cs.size());
   std::vector<double> weight(cs.size(), 0.0);
   std::vector<double> abs_rows;
@@ -271,7 +275,7 @@ MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& mat
       if (row.rows == 0) continue;
       const double e2 = row.e.squaredNorm();
       out.inliers += e2 <= inlier2 * row.rows ? 1 : 0;
-      if (reweighted) weight[i] = 1.0 / (1.0 + e2 / (row.rows * c2));
+      if (reweighted) weight[i] = cauchy_weight(row, c2);
       h.noalias() += weight[i] * row.j.transpose() * row.j;
       g.noalias() += weight[i] * row.j.transpose() * row.e;
     }
@@ -328,6 +332,7 @@ MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& mat
   }
   out.motion.cam_b_from_cam_a = Rigid3d(Eigen::Quaterniond(r).normalized(), t);
   out.motion.covariance = 0.5 * (cov + cov.transpose());
+  if (!options.measure_rotation) return out;
 
   // The rotation the matches alone measure, for a gyro bias filter (ImuRotationFromFit): the
   // same residuals from the fit on, with the prior's translation information only (the epipolar
@@ -347,7 +352,7 @@ MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& mat
       Row& row = rs[i];
       residual(cs[i], row);
       if (row.rows == 0) continue;
-      const double w = 1.0 / (1.0 + row.e.squaredNorm() / (row.rows * c2));
+      const double w = cauchy_weight(row, c2);
       h.noalias() += w * row.j.transpose() * row.j;
       g.noalias() += w * row.j.transpose() * row.e;
     }
@@ -376,7 +381,7 @@ MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& mat
 
 std::optional<ImuRotationMeasurement> ImuRotationFromFit(const MotionRefit& refit,
                                                          const Rigid3d& cam_from_imu) {
-  if (!refit.ok || !refit.rotation_from_matches_ok) return std::nullopt;
+  if (!refit.rotation_from_matches_ok) return std::nullopt;
   // R_cam_true = Exp(theta) R_cam; R_imu (b from a) = R_ic R_cam R_ci, so R_imu_true =
   // Exp(R_ic theta) R_imu and imu_a_from_imu_b_true = imu_a_from_imu_b Exp(-R_ic theta).
   const Eigen::Quaterniond imu_from_cam = cam_from_imu.rotation.conjugate();

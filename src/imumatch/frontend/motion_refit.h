@@ -42,6 +42,9 @@ struct MotionRefitOptions {
   // (a repeated texture, a moving object) or the prior is wrong; either way the prior's wider
   // windows are the safe ones.
   double agreement_probability = 0.9999;
+  // Also solve for the rotation the matches alone measure (MotionRefit::rotation_from_matches,
+  // for a gyro bias filter): a second, reweighted solve from the fit on, so only when asked.
+  bool measure_rotation = false;
   void Check() const;  // throws InvalidArgument
 };
 
@@ -58,7 +61,7 @@ struct MotionRefit {
   CameraMotion motion;
   // The rotation cam_b_from_cam_a that the matches alone measure (without the prior's rotation,
   // with its translation: see ImuRotationFromFit) and its covariance (3x3, left perturbation as
-  // CameraMotion's); set when ok and that solve converged.
+  // CameraMotion's); set when ok, options.measure_rotation and that solve converged.
   bool rotation_from_matches_ok = false;
   Eigen::Quaterniond rotation_from_matches = Eigen::Quaterniond::Identity();
   Eigen::Matrix3d rotation_from_matches_covariance = Eigen::Matrix3d::Zero();
@@ -69,7 +72,7 @@ struct MotionRefit {
 // minimised with the prior's translation information only (the prior's rotation is the gyro's,
 // which the filter has already; the epipolar residuals do not see the translation's length),
 // expressed for the IMU through cam_from_imu: imu_a_from_imu_b and its covariance (right
-// perturbation). nullopt when the fit is not ok or that solve did not converge.
+// perturbation). nullopt when rotation_from_matches is not set.
 struct ImuRotationMeasurement {
   Eigen::Quaterniond imu_a_from_imu_b = Eigen::Quaterniond::Identity();
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();

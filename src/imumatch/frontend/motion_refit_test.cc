@@ -296,6 +296,8 @@ TEST(MotionRefitTest, ImuRotationFromFitTakesOutThePriorsRotation) {
       SCOPED_TRACE(std::string(with_depth ? "with depth, " : "without depth, ") +
                    std::to_string(outliers) + " wrong");
       const int n = 40;
+      MotionRefitOptions measuring;
+      measuring.measure_rotation = true;
       double chi2 = 0.0, along = 0.0, along2 = 0.0, fit_along = 0.0;
       for (int k = 0; k < n; ++k) {
         const Scene s = MakeScene(TrueMotion(), 300, 0.5, outliers, 100 + k);
@@ -306,7 +308,7 @@ TEST(MotionRefitTest, ImuRotationFromFitTakesOutThePriorsRotation) {
         const CameraMotion prior = Prior(offset, sigma);
         const MotionRefit r = RefitMotion(prior, s.matches, s.keypoints_a, s.keypoints_b,
                                           with_depth ? s.depths : std::vector<float>{},
-                                          PredictionOptions(), und, MotionRefitOptions());
+                                          PredictionOptions(), und, measuring);
         ASSERT_TRUE(r.ok) << r.reason;
         const std::optional<ImuRotationMeasurement> m = ImuRotationFromFit(r, cam_from_imu);
         ASSERT_TRUE(m.has_value());
