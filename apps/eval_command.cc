@@ -60,6 +60,7 @@ struct CommonArgs {
   bool no_refine = false;
   bool single_pass = false;
   bool fixed_gyro_bias = false;
+  bool no_patch_look = false;
   double guided_ratio = -1.0;           // < 0: --ratio
   double orientation_tolerance = -1.0;  // < 0: GuidedMatcherOptions default
   double still_s = 1.0;
@@ -126,6 +127,8 @@ void AddCommonOptions(CLI::App* cmd, CommonArgs& a) {
   cmd->add_flag("--fixed-gyro-bias", a.fixed_gyro_bias,
                 "recorded IMU: keep the still start's gyro bias (do not learn it from the guided "
                 "pairs' fitted rotations)");
+  cmd->add_flag("--no-patch-look", a.no_patch_look,
+                "guided: no second look by the image patch at the queries left unmatched");
   cmd->add_flag("--single-pass", a.single_pass,
                 "guided: match once with the IMU's windows (no second pass with the motion fitted "
                 "to the first pass's matches)");
@@ -178,6 +181,7 @@ EvaluationOptions MakeOptions(const CommonArgs& a) {
   o.refine_subpixel = !a.no_refine;
   o.second_pass = !a.single_pass;
   o.gyro_bias_from_matches = !a.fixed_gyro_bias;
+  o.patch_second_look = !a.no_patch_look;
   if (a.orientation_tolerance >= 0.0) o.guided.orientation_tolerance_deg = a.orientation_tolerance;
   if (a.sigma_scaling == "none") {
     o.prediction.sigma_scaling = KeypointSigmaScaling::kNone;
@@ -211,6 +215,7 @@ void Finish(const EvaluationResult& result, ReportContext& context, const Common
                                                {"imu mode", ToString(o.motion.mode)},
                                                {"imu model", a.imu_model},
                                                {"seed", std::to_string(a.seed)}});
+  context.config.push_back({"second look by the patch", o.patch_second_look ? "on" : "off"});
   for (const std::string& w : result.warnings) std::cerr << "imumatch: warning: " << w << "\n";
   std::cout << MarkdownReport(result, context) << std::flush;
   const auto files = WriteEvaluationOutputs(a.out, result, context);

@@ -485,6 +485,49 @@ TEST(EvalFlightTest, GuidedBeatsBruteForceWithAndWithoutDepth) {
   }
 }
 
+// The second look by the image patch: the queries the descriptors left unmatched with candidates
+// in their windows, matched where A's patch (warped by the IMU's prediction) aligns at one place.
+// Judged by the ground truth: on the frames with depth its matches are at least as precise as the
+// guided matches of the descriptors, and it adds a good share of matches.
+TEST(EvalFlightTest, ThePatchLookAddsMatchesAsPreciseAsTheDescriptors) {
+  const FlightRun& run = FlightImu();
+  for (DetectorKind d : {DetectorKind::kOrb, DetectorKind::kSift}) {
+    SCOPED_TRACE(ToString(d));
+    int added = 0, added_correct = 0, added_depth = 0, added_depth_correct = 0;
+    int other_depth = 0, other_depth_correct = 0, pairs = 0;
+    for (const auto& r : run.result.records) {
+      if (r.detector != d) continue;
+      for (const auto& mr : r.runs) {
+        if (mr.method != MatchMethod::kGuided) continue;
+        ++pairs;
+        ASSERT_EQ(mr.match_by_patch.size(), mr.residuals.size());
+        for (size_t j = 0; j < mr.residuals.size(); ++j) {
+          const bool correct = mr.residuals[j].CorrectAt(run.threshold_px);
+          const bool by_depth = mr.residuals[j].kind == ResidualKind::kDepth;
+          if (mr.match_by_patch[j]) {
+            ++added;
+            added_correct += correct;
+            added_depth += by_depth;
+            added_depth_correct += by_depth && correct;
+          } else if (by_depth) {
+            ++other_depth;
+            other_depth_correct += correct;
+          }
+        }
+      }
+    }
+    std::cout << ToString(d) << ": patch look added " << added << " matches in " << pairs
+              << " pairs (" << added_correct << " correct), judged by depth " << added_depth << " ("
+              << added_depth_correct << " correct); the descriptors' judged by depth "
+              << other_depth << " (" << other_depth_correct << " correct)\n";
+    ASSERT_EQ(pairs, 40);
+    EXPECT_GT(added, (d == DetectorKind::kOrb ? 10 : 1) * pairs);
+    ASSERT_GT(added_depth, 10);
+    EXPECT_GE(static_cast<double>(added_depth_correct) / added_depth,
+              static_cast<double>(other_depth_correct) / other_depth);
+  }
+}
+
 TEST(EvalFlightTest, TheFateOfBruteForcesCorrectMatchesAddsUp) {
   // Each query has at most one match per method, so brute force's correct matches split into
   // kept, matched wrong and the not-matched outcomes, and gained - lost is exactly the difference

@@ -52,6 +52,11 @@ struct MethodRun {
   double refit_rotation_error_deg = 0.0;
   double refit_translation_error_m = 0.0;
   SubpixelStats refine_stats;
+  // Guided, second look by the image patch (EvaluationOptions::patch_second_look): what it did,
+  // its cost (included in match_ms), and per match 1 when it found the match.
+  PatchMatchingStats patch;
+  double patch_ms = 0.0;
+  std::vector<uint8_t> match_by_patch;
   // Tracking methods: how every track ended; hybrid: how many correspondences each path made.
   TrackStats track_stats;
   int from_tracks = 0;

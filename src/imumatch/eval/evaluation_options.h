@@ -13,6 +13,7 @@
 #include "imumatch/imu/gyro_bias_filter.h"
 #include "imumatch/matching/guided_matcher.h"
 #include "imumatch/matching/klt_tracker.h"
+#include "imumatch/matching/patch_matching.h"
 #include "imumatch/matching/predictor.h"
 #include "imumatch/matching/subpixel_refinement.h"
 
@@ -86,6 +87,10 @@ struct EvaluationOptions {
   // disagrees with the IMU.
   bool second_pass = true;
   MotionRefitOptions refit;
+  // Guided method: the queries still unmatched are looked at again by the image patch (A's patch
+  // warped by the prediction, aligned at each candidate: MatchByPatch); charged to matching.
+  bool patch_second_look = true;
+  PatchMatchingOptions patch;
   GroundTruthOptions ground_truth;
   // Tracking methods: the seeded tracker (klt, hybrid) and the unseeded baseline (klt0, with
   // VINS-Fusion's settings: 21 x 21 window, 3 levels, forward-backward <= 0.5 px).

@@ -4,11 +4,13 @@
 #include <utility>
 
 #include "imumatch/core/time.h"
+#include "imumatch/features/image_util.h"
 #include "imumatch/frontend/motion_refit.h"
 #include "imumatch/matching/baseline_matchers.h"
 #include "imumatch/matching/grid_index.h"
 #include "imumatch/matching/guided_matcher.h"
 #include "imumatch/matching/klt_tracker.h"
+#include "imumatch/matching/patch_matching.h"
 #include "imumatch/matching/scene_depth.h"
 #include "imumatch/matching/subpixel_refinement.h"
 
@@ -155,6 +157,23 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
       run.match_ms += MsSince(t0);
     }
   }
+  std::vector<uint8_t> patch_query;  // by query of A: matched by the patch
+  if (method == MatchMethod::kGuided && options.patch_second_look) {
+    t0 = Clock::now();
+    std::vector<QueryOutcome> before = result.outcomes;
+    run.patch = MatchByPatch(
+        predictions, ca.ideal, fa.keypoints, DescriptorView::FromMat(fa.descriptors), cb.ideal,
+        grid_b, fb.keypoints, DescriptorView::FromMat(fb.descriptors),
+        ToGray8(image_a.image, "patch matching"), ToGray8(image_b.image, "patch matching"), camera,
+        options.guided, options.patch, &result);
+    run.patch_ms = MsSince(t0);
+    run.match_ms += run.patch_ms;
+    patch_query.assign(before.size(), 0);
+    for (size_t i = 0; i < before.size(); ++i) {
+      patch_query[i] =
+          before[i] != QueryOutcome::kMatched && result.outcomes[i] == QueryOutcome::kMatched;
+    }
+  }
   run.window_px = MeanWindowHalfSize(predictions);
   run.stats = result.stats;
   run.outcomes = std::move(result.outcomes);
@@ -164,6 +183,12 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
     run.refine_stats = RefineMatches(image_a.image, image_b.image, fa.keypoints, fb.keypoints,
                                      predictions, camera, options.subpixel, matches);
     run.refine_ms = MsSince(t0);
+  }
+  if (!patch_query.empty()) {
+    run.match_by_patch.resize(matches.size());
+    for (size_t j = 0; j < matches.size(); ++j) {
+      run.match_by_patch[j] = patch_query[static_cast<size_t>(matches[j].query_idx)];
+    }
   }
   return run;
 }

@@ -88,6 +88,17 @@ std::string MarkdownReport(const EvaluationResult& result, const ReportContext& 
            "uncertainty or its windows are not smaller (--single-pass: never tried).\n\n"
         << second_pass;
   }
+  const std::string patch_look =
+      MarkdownPatchLookTable(result.records, context.threshold.threshold_px);
+  if (!patch_look.empty()) {
+    out << "\n## Second look by the image patch (mean per pair)\n\n"
+        << "The queries the guided search left unmatched although their window held candidates "
+           "(orientation, distance or ratio rejections) are looked at again: A's patch, warped "
+           "as the prediction says, is aligned at each candidate; a candidate passes when the "
+           "patch converges within 2 px of it with a correlation of at least 0.9, and the query "
+           "is matched when those that pass point to one place (--no-patch-look: off).\n\n"
+        << patch_look;
+  }
   const std::string refinement = MarkdownRefinementTable(result.records);
   if (!refinement.empty()) {
     out << "\n## Sub-pixel refinement (mean per pair)\n\n"

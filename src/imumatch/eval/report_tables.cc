@@ -334,6 +334,45 @@ std::string MarkdownRefinementTable(const std::vector<DetectorPairRecord>& recor
   return out.str();
 }
 
+std::string MarkdownPatchLookTable(const std::vector<DetectorPairRecord>& records,
+                                   double threshold_px) {
+  struct Acc {
+    int pairs = 0;
+    double queries = 0, aligned = 0, ambiguous = 0, matched = 0, kept = 0, correct = 0, ms = 0;
+  };
+  RunTable<Acc> table;
+  for (const auto& r : records) {
+    for (const auto& run : r.runs) {
+      if (run.match_by_patch.empty() && run.patch.queries == 0) continue;
+      Acc& a = table.At(r, run);
+      ++a.pairs;
+      a.queries += run.patch.queries;
+      a.aligned += run.patch.aligned;
+      a.ambiguous += run.patch.ambiguous;
+      a.matched += run.patch.matched;
+      a.ms += run.patch_ms;
+      for (size_t j = 0; j < run.match_by_patch.size() && j < run.residuals.size(); ++j) {
+        if (!run.match_by_patch[j]) continue;
+        a.kept += 1;
+        a.correct += run.residuals[j].CorrectAt(threshold_px) ? 1 : 0;
+      }
+    }
+  }
+  if (table.empty()) return "";
+  std::ostringstream out;
+  out << "| Case | Detector | Method | pairs | queries looked at again | candidates aligned | "
+         "ambiguous | matches added | after refinement | of them correct | ms |\n"
+         "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  table.Write(out, [](std::ostream& o, const Acc& a) {
+    const double n = a.pairs;
+    o << a.pairs << " | " << FormatFixed(a.queries / n, 1) << " | " << FormatFixed(a.aligned / n, 1)
+      << " | " << FormatFixed(a.ambiguous / n, 1) << " | " << FormatFixed(a.matched / n, 1) << " | "
+      << FormatFixed(a.kept / n, 1) << " | " << FormatFixed(a.correct / n, 1) << " | "
+      << FormatFixed(a.ms / n, 2) << " |\n";
+  });
+  return out.str();
+}
+
 std::string MarkdownMotionErrorTable(const std::vector<DetectorPairRecord>& records) {
   std::map<std::string, std::vector<double>> rot, trans;
   std::vector<std::string> order;

@@ -39,6 +39,11 @@ std::string MarkdownSecondPassTable(const std::vector<DetectorPairRecord>& recor
 // The sub-pixel refinement (RefineMatches) per case, detector and method, mean per pair: aligned
 // (and by the larger patch after a drift), unrefined (flat / border), dropped. Empty when no run
 // was refined.
+// The second look by the image patch (MatchByPatch), mean per pair: queries looked at again,
+// candidates aligned, queries whose patch was found at two places, matches added, kept after
+// refinement, correct at threshold_px, the time.
+std::string MarkdownPatchLookTable(const std::vector<DetectorPairRecord>& records,
+                                   double threshold_px);
 std::string MarkdownRefinementTable(const std::vector<DetectorPairRecord>& records);
 // How the tracks of the tracking methods (klt0, klt, hybrid) ended, mean per pair; "" when no
 // record has a tracking run.

@@ -21,6 +21,7 @@ void FrontEndOptions::Check() const {
   prediction.Check();
   guided.Check();
   subpixel.Check();
+  patch.Check();
   klt.Check();
   motion.Check();
   pose.Check();
@@ -169,6 +170,12 @@ std::vector<Match> FrontEnd::MatchPass(const CameraMotion& motion, const Feature
   MatchResult r = MatchGuided(
       *guided_predictions, prev.ideal, DescriptorView::FromMat(prev.features.descriptors), ideal,
       grid, DescriptorView::FromMat(features.descriptors), options_.guided, &scratch);
+  if (options_.patch_second_look) {
+    MatchByPatch(*guided_predictions, prev.ideal, prev.features.keypoints,
+                 DescriptorView::FromMat(prev.features.descriptors), ideal, grid,
+                 features.keypoints, DescriptorView::FromMat(features.descriptors), prev.image,
+                 image, camera, options_.guided, options_.patch, &r);
+  }
   if (options_.refine_subpixel) {
     RefineMatches(prev.image, image, prev.features.keypoints, features.keypoints, predictions,
                   camera, options_.subpixel, r.matches);

@@ -18,6 +18,7 @@
 #include "imumatch/imu/imu_params.h"
 #include "imumatch/matching/guided_matcher.h"
 #include "imumatch/matching/klt_tracker.h"
+#include "imumatch/matching/patch_matching.h"
 #include "imumatch/matching/predictor.h"
 #include "imumatch/matching/subpixel_refinement.h"
 
@@ -47,6 +48,11 @@ struct FrontEndOptions {
   GuidedMatcherOptions guided;
   bool refine_subpixel = true;
   SubpixelOptions subpixel;
+  // The queries the guided search left unmatched with candidates in their window are looked at
+  // again by the image patch (MatchByPatch): A's patch, warped as the IMU predicts, aligned at
+  // each candidate.
+  bool patch_second_look = true;
+  PatchMatchingOptions patch;
   KltOptions klt;
   // Integration mode and the attitude / bias sigmas; velocity_sigma is the front end's own.
   CameraMotionOptions motion;

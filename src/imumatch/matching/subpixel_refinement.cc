@@ -41,6 +41,17 @@ AlignStatus AlignPatch(PatchTemplate& tpl, const cv::Mat& gray_a, const cv::Mat&
 
 }  // namespace
 
+Eigen::Matrix2f PatchWarpInImage(const KeypointPrediction& prediction, const PinholeCamera& camera,
+                                 const Eigen::Vector2f& pa, const Eigen::Vector2f& pb) {
+  if (!prediction.HasWindow() || !prediction.local_affine.allFinite()) {
+    return Eigen::Matrix2f::Identity();
+  }
+  if (!camera.HasDistortion()) return prediction.local_affine;
+  return (camera.IdealFromPixelJacobian(pb.cast<double>()).inverse() *
+          prediction.local_affine.cast<double>() * camera.IdealFromPixelJacobian(pa.cast<double>()))
+      .cast<float>();
+}
+
 // The alignment itself: patch_alignment.h.
 SubpixelStats RefineMatches(const cv::Mat& gray_a, const cv::Mat& gray_b,
                             const std::vector<cv::KeyPoint>& keypoints_a,
@@ -55,7 +66,6 @@ SubpixelStats RefineMatches(const cv::Mat& gray_a, const cv::Mat& gray_b,
   IMUMATCH_CHECK(predictions.empty() || predictions.size() == keypoints_a.size(),
                  predictions.size() << " predictions for " << keypoints_a.size() << " keypoints");
   SubpixelStats stats;
-  const bool distorted = camera.HasDistortion();
   const float max_shift2 = static_cast<float>(options.max_shift_px * options.max_shift_px);
   PatchTemplate tpl(2 * options.half_size);
   std::vector<char> drop(matches.size(), 0);
@@ -68,21 +78,11 @@ SubpixelStats RefineMatches(const cv::Mat& gray_a, const cv::Mat& gray_b,
     const cv::KeyPoint& ka = keypoints_a[static_cast<size_t>(m.query_idx)];
     const cv::KeyPoint& kb = keypoints_b[static_cast<size_t>(m.train_idx)];
     // d pixel_b / d pixel_a: the prediction's affine map in ideal pixels, conjugated by the lens.
-    Eigen::Matrix2f affine = Eigen::Matrix2f::Identity();
-    if (!predictions.empty()) {
-      const KeypointPrediction& p = predictions[static_cast<size_t>(m.query_idx)];
-      if (p.HasWindow() && p.local_affine.allFinite()) {
-        affine = p.local_affine;
-        if (distorted) {
-          // The lens's local Jacobians, taken at the image positions instead of the ideal ones
-          // (a few per cent off at the corners of a strong lens; no iterative undistortion).
-          affine = (camera.IdealFromPixelJacobian(Eigen::Vector2d(kb.pt.x, kb.pt.y)).inverse() *
-                    affine.cast<double>() *
-                    camera.IdealFromPixelJacobian(Eigen::Vector2d(ka.pt.x, ka.pt.y)))
-                       .cast<float>();
-        }
-      }
-    }
+    const Eigen::Matrix2f affine =
+        predictions.empty() ? Eigen::Matrix2f::Identity()
+                            : PatchWarpInImage(predictions[static_cast<size_t>(m.query_idx)],
+                                               camera, Eigen::Vector2f(ka.pt.x, ka.pt.y),
+                                               Eigen::Vector2f(kb.pt.x, kb.pt.y));
     const float det_a = affine.determinant();
     if (!(std::fabs(det_a) > 1e-3f)) {
       ++stats.failed_texture;  // a degenerate warp: nothing to align

@@ -67,6 +67,13 @@ struct SubpixelStats {
   int64_t iterations = 0;      // Gauss-Newton steps over all matches
 };
 
+// d pixel_b / d pixel_a in image pixels near A's point pa and B's point pb: the prediction's local
+// affine map (ideal pixels) conjugated by the lens's local Jacobians, which are taken at the image
+// positions instead of the ideal ones (a few per cent off at the corners of a strong lens; no
+// iterative undistortion). The identity when the prediction has no window or no finite map.
+Eigen::Matrix2f PatchWarpInImage(const KeypointPrediction& prediction, const PinholeCamera& camera,
+                                 const Eigen::Vector2f& pa, const Eigen::Vector2f& pb);
+
 // gray_a / gray_b: 8-bit single-channel images of the two frames. keypoints in image pixels as
 // the detector gave them. predictions: one per keypoint of A, or empty (identity warp).
 // Throws InvalidArgument for empty or non-8-bit images and size mismatches.

@@ -1,0 +1,215 @@
+#include "imumatch/matching/patch_matching.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "imumatch/core/error.h"
+
+namespace imumatch {
+namespace {
+
+// Blurred Gaussian noise, 8-bit: texture everywhere, no repetition.
+cv::Mat Noise(uint64_t seed) {
+  cv::Mat f(240, 320, CV_32F);
+  cv::RNG rng(seed);
+  rng.fill(f, cv::RNG::NORMAL, 0.0, 1.0);
+  cv::GaussianBlur(f, f, cv::Size(0, 0), 1.8);
+  cv::normalize(f, f, 15, 240, cv::NORM_MINMAX);
+  cv::Mat out;
+  f.convertTo(out, CV_8U);
+  return out;
+}
+
+// Frame B: A turned by angle_deg about (160, 120) and shifted; Map() is the truth.
+struct Scene {
+  cv::Mat a, b;
+  Eigen::Matrix2f rot;
+  Eigen::Vector2f t;
+  Eigen::Vector2f Map(const Eigen::Vector2f& p) const { return rot * p + t; }
+};
+Scene MakeScene(double angle_deg, const Eigen::Vector2f& shift) {
+  Scene s;
+  s.a = Noise(7);
+  const float th = static_cast<float>(angle_deg * M_PI / 180.0);
+  s.rot << std::cos(th), -std::sin(th), std::sin(th), std::cos(th);
+  const Eigen::Vector2f centre(160.0f, 120.0f);
+  s.t = centre - s.rot * centre + shift;
+  const cv::Mat m = (cv::Mat_<double>(2, 3) << s.rot(0, 0), s.rot(0, 1), s.t.x(), s.rot(1, 0),
+                     s.rot(1, 1), s.t.y());
+  cv::warpAffine(s.a, s.b, m, s.a.size(), cv::INTER_CUBIC, cv::BORDER_REFLECT);
+  return s;
+}
+
+// Queries on a grid of A; in B each has its partner on the whole pixel nearest the truth (a
+// detector's grid) and a decoy 6 px to the right. Descriptors all equal, so that the guided
+// matcher's ratio test could not tell partner from decoy: every query starts as rejected by it.
+struct Problem {
+  std::vector<cv::KeyPoint> kps_a, kps_b;
+  std::vector<KeypointInfo> ideal_a, ideal_b;
+  std::vector<KeypointPrediction> predictions;
+  std::vector<Eigen::Vector2f> truth;
+  cv::Mat desc_a, desc_b;
+  GridIndex grid;
+  MatchResult result;
+};
+Problem MakeProblem(const Scene& s) {
+  Problem p;
+  for (int y = 40; y <= 200; y += 40) {
+    for (int x = 40; x <= 260; x += 44) {
+      const Eigen::Vector2f pa(static_cast<float>(x), static_cast<float>(y));
+      const Eigen::Vector2f truth = s.Map(pa);
+      p.truth.push_back(truth);
+      p.kps_a.emplace_back(cv::Point2f(pa.x(), pa.y()), 8.0f, 30.0f);
+      const cv::Point2f partner(std::round(truth.x()), std::round(truth.y()));
+      p.kps_b.emplace_back(partner, 8.0f, 33.0f);
+      p.kps_b.emplace_back(partner + cv::Point2f(6.0f, 0.0f), 8.0f, 33.0f);
+      KeypointPrediction pr;
+      pr.status = PredictionStatus::kWithDepth;
+      pr.uv = truth;
+      pr.min_x = truth.x() - 9.0f;
+      pr.max_x = truth.x() + 9.0f;
+      pr.min_y = truth.y() - 9.0f;
+      pr.max_y = truth.y() + 9.0f;
+      pr.local_affine = s.rot;
+      p.predictions.push_back(pr);
+    }
+  }
+  p.ideal_a = ToKeypointInfos(p.kps_a);
+  p.ideal_b = ToKeypointInfos(p.kps_b);
+  p.desc_a = cv::Mat::zeros(static_cast<int>(p.kps_a.size()), 32, CV_8U);
+  p.desc_b = cv::Mat::zeros(static_cast<int>(p.kps_b.size()), 32, CV_8U);
+  p.grid.Build(p.ideal_b, 320, 240, 8.0f);
+  const int n = static_cast<int>(p.kps_a.size());
+  p.result.outcomes.assign(static_cast<size_t>(n), QueryOutcome::kRatioTest);
+  p.result.stats.queries = n;
+  p.result.stats.ratio_test = n;
+  return p;
+}
+
+PinholeCamera Camera() {
+  PinholeCamera c;
+  c.width = 320;
+  c.height = 240;
+  return c;
+}
+
+PatchMatchingStats MatchAll(Problem& p, const Scene& s,
+                            const PatchMatchingOptions& options = PatchMatchingOptions()) {
+  return MatchByPatch(p.predictions, p.ideal_a, p.kps_a, DescriptorView::FromMat(p.desc_a),
+                      p.ideal_b, p.grid, p.kps_b, DescriptorView::FromMat(p.desc_b), s.a, s.b,
+                      Camera(), GuidedMatcherOptions(), options, &p.result);
+}
+
+TEST(PatchMatchingTest, MatchesEachRejectedQueryToItsTruePartnerNotTheDecoy) {
+  const Scene s = MakeScene(3.0, Eigen::Vector2f(2.4f, -1.3f));
+  Problem p = MakeProblem(s);
+  const int n = static_cast<int>(p.kps_a.size());
+  const PatchMatchingStats st = MatchAll(p, s);
+  EXPECT_EQ(st.queries, n);
+  EXPECT_EQ(st.aligned, 2 * n);
+  EXPECT_EQ(st.ambiguous, 0);
+  ASSERT_EQ(st.matched, n);
+  ASSERT_EQ(static_cast<int>(p.result.matches.size()), n);
+  for (const Match& m : p.result.matches) {
+    EXPECT_EQ(m.train_idx, 2 * m.query_idx) << "query " << m.query_idx << " took the decoy";
+    // The aligned position is the truth (the partner keypoint sits up to 0.7 px off it).
+    EXPECT_LT((m.refined_uv_b - p.truth[static_cast<size_t>(m.query_idx)]).norm(), 0.1f);
+    EXPECT_EQ(p.result.outcomes[static_cast<size_t>(m.query_idx)], QueryOutcome::kMatched);
+  }
+  EXPECT_EQ(p.result.stats.ratio_test, 0);
+  EXPECT_EQ(p.result.stats.matched, n);
+  EXPECT_EQ(p.result.stats.OutcomeSum(), n);
+}
+
+TEST(PatchMatchingTest, TwoPlacesShowingThePatchMatchNeither) {
+  Scene s = MakeScene(0.0, Eigen::Vector2f(1.6f, 0.7f));
+  Problem p = MakeProblem(s);
+  // Query 0's decoy moved to 9 px (inside a wider window), and B's neighbourhood of its partner
+  // copied there: B shows the patch twice, 9 px apart, both copies intact.
+  p.kps_b[1].pt = p.kps_b[0].pt + cv::Point2f(9.0f, 0.0f);
+  p.ideal_b = ToKeypointInfos(p.kps_b);
+  p.grid.Build(p.ideal_b, 320, 240, 8.0f);
+  p.predictions[0].max_x += 3.0f;
+  const cv::Point2f partner = p.kps_b[0].pt;
+  const int x0 = static_cast<int>(partner.x) - 5, y0 = static_cast<int>(partner.y) - 10;
+  const cv::Mat strip = s.b(cv::Rect(x0, y0, 10, 21)).clone();
+  strip.copyTo(s.b(cv::Rect(x0 + 9, y0, 10, 21)));
+  PatchMatchingOptions o;
+  o.half_size = 3;  // 7 x 7 samples: inside the copied 10 x 21 strip
+  const PatchMatchingStats st = MatchAll(p, s, o);
+  EXPECT_GE(st.ambiguous, 1);
+  for (const Match& m : p.result.matches) EXPECT_NE(m.query_idx, 0);
+  EXPECT_EQ(p.result.outcomes[0], QueryOutcome::kRatioTest);
+  EXPECT_GE(st.matched, static_cast<int>(p.kps_a.size()) - 2);
+}
+
+TEST(PatchMatchingTest, AnUnrelatedFrameGivesNoMatch) {
+  Scene s = MakeScene(0.0, Eigen::Vector2f(1.0f, 1.0f));
+  s.b = Noise(99);
+  Problem p = MakeProblem(s);
+  const PatchMatchingStats st = MatchAll(p, s);
+  EXPECT_EQ(st.matched, 0);
+  EXPECT_TRUE(p.result.matches.empty());
+  EXPECT_EQ(p.result.stats.ratio_test, static_cast<int>(p.kps_a.size()));
+}
+
+TEST(PatchMatchingTest, FirstLookMatchesKeepTheirQueriesAndKeypoints) {
+  const Scene s = MakeScene(2.0, Eigen::Vector2f(-1.2f, 2.2f));
+  Problem p = MakeProblem(s);
+  // The first look matched query 0 to keypoint 2 (query 1's partner: a first look may err).
+  // That match stands, and query 1 may not take keypoint 2 again.
+  Match first;
+  first.query_idx = 0;
+  first.train_idx = 2;
+  p.result.matches.push_back(first);
+  p.result.outcomes[0] = QueryOutcome::kMatched;
+  p.result.stats.ratio_test -= 1;
+  p.result.stats.matched = 1;
+  MatchAll(p, s);
+  int from_query0 = 0;
+  for (const Match& m : p.result.matches) {
+    if (m.query_idx == 0) {
+      ++from_query0;
+      EXPECT_EQ(m.train_idx, 2);
+    }
+    EXPECT_NE(m.query_idx, 1) << "query 1's partner was taken";
+  }
+  EXPECT_EQ(from_query0, 1);
+  EXPECT_EQ(p.result.stats.OutcomeSum(), static_cast<int>(p.kps_a.size()));
+}
+
+TEST(PatchMatchingTest, TheDescriptorThresholdGuardsWhenAskedTo) {
+  const Scene s = MakeScene(1.0, Eigen::Vector2f(0.5f, 0.5f));
+  Problem p = MakeProblem(s);
+  p.desc_b.setTo(255);  // every candidate 256 bits away: beyond the Hamming threshold
+  EXPECT_EQ(MatchAll(p, s).matched, static_cast<int>(p.kps_a.size()));  // the patch decides
+  Problem q = MakeProblem(s);
+  q.desc_b.setTo(255);
+  PatchMatchingOptions o;
+  o.require_distance_threshold = true;
+  EXPECT_EQ(MatchAll(q, s, o).matched, 0);
+}
+
+TEST(PatchMatchingTest, RejectsBadInput) {
+  const Scene s = MakeScene(0.0, Eigen::Vector2f(1.0f, 1.0f));
+  Problem p = MakeProblem(s);
+  p.predictions.pop_back();
+  EXPECT_THROW(MatchAll(p, s), InvalidArgument);
+  Problem q = MakeProblem(s);
+  EXPECT_THROW(
+      MatchByPatch(q.predictions, q.ideal_a, q.kps_a, DescriptorView::FromMat(q.desc_a), q.ideal_b,
+                   q.grid, q.kps_b, DescriptorView::FromMat(q.desc_b), s.a, cv::Mat(), Camera(),
+                   GuidedMatcherOptions(), PatchMatchingOptions(), &q.result),
+      InvalidArgument);
+  PatchMatchingOptions o;
+  o.min_correlation = 1.5;
+  EXPECT_THROW(o.Check(), InvalidArgument);
+  o = PatchMatchingOptions();
+  o.max_shift_px = std::nan("");
+  EXPECT_THROW(o.Check(), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace imumatch
