@@ -132,6 +132,8 @@ void FrontEnd::Initialise(int64_t t_ns, FrontEndResult& result) {
   velocity_sigma_ =
       std::max(options_.min_velocity_sigma,
                std::hypot(options_.min_velocity_sigma, options_.motion.accel_bias_sigma * since));
+  velocity_fix_sigma_ = options_.min_velocity_sigma;  // at rest at t1
+  velocity_fix_t_ns_ = t1;
   note << "; velocity propagated from rest over " << std::fixed << std::setprecision(2) << since
        << " s (sigma " << velocity_sigma_ << " m/s)";
   notes_.push_back(note.str());
@@ -409,9 +411,14 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
     const NavState b = Propagate(a, pim, imu_params_.gravity_in_world);
     attitude = b.world_from_imu.rotation;  // the gyro's
     v = b.velocity_in_world;
-    sigma = std::sqrt(velocity_sigma_ * velocity_sigma_ +
-                      std::pow(options_.motion.accel_bias_sigma * dt, 2) +
-                      imu_params_.accel_noise_density * imu_params_.accel_noise_density * dt);
+    // Since the last fix: the accelerometer bias's error integrated (linear in time) and the
+    // white noise's (a random walk). Summed per frame as a random walk, the bias's share was
+    // sqrt(dt / t) of this: 12x too small after 8 s without depth at 20 Hz.
+    const double since_fix = std::max(0.0, NsToSeconds(frame.t_ns - velocity_fix_t_ns_));
+    sigma =
+        std::sqrt(velocity_fix_sigma_ * velocity_fix_sigma_ +
+                  std::pow(options_.motion.accel_bias_sigma * since_fix, 2) +
+                  imu_params_.accel_noise_density * imu_params_.accel_noise_density * since_fix);
     if (result.pose_from_depth) {
       // The velocity that explains the fitted translation, given the IMU's increments.
       const Eigen::Matrix3d ra = world_from_imu_.rotation.toRotationMatrix();
@@ -424,10 +431,14 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
       const double wp = 1.0 / (sigma * sigma), wm = 1.0 / (sm * sm);
       v = (wp * v + wm * vb) / (wp + wm);
       sigma = std::sqrt(1.0 / (wp + wm));
+      velocity_fix_sigma_ = std::max(options_.min_velocity_sigma, sigma);
+      velocity_fix_t_ns_ = frame.t_ns;
     }
   }
-  if (result.status == FrameStatus::kBruteForce) {
+  if (result.status == FrameStatus::kBruteForce || !imu_ok) {
     sigma = std::max(sigma, options_.unknown_velocity_sigma);  // re-initialised
+    velocity_fix_sigma_ = sigma;
+    velocity_fix_t_ns_ = frame.t_ns;
   }
   world_from_imu_ = Rigid3d(attitude, world_from_imu_b.translation);
   velocity_ = v;

@@ -157,6 +157,11 @@ class FrontEnd {
   Rigid3d world_from_imu_;
   Eigen::Vector3d velocity_ = Eigen::Vector3d::Zero();
   double velocity_sigma_ = 1.0;
+  // The velocity's last fix (initialisation, a fit with depth, a re-initialisation): its sigma
+  // and time. An accelerometer bias error is constant, so the velocity's error grows linearly
+  // from there (accel_bias_sigma x time), not as a random walk from frame to frame.
+  double velocity_fix_sigma_ = 1.0;
+  int64_t velocity_fix_t_ns_ = 0;
   ImuBias bias_;
   double gyro_bias_sigma_ = 0.0;
   int64_t bias_t_ns_ = 0;
