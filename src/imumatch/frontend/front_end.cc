@@ -143,6 +143,7 @@ void FrontEnd::Initialise(int64_t t_ns, FrontEndResult& result) {
 
 std::vector<Match> FrontEnd::MatchPass(const CameraMotion& motion, const Features& features,
                                        const std::vector<KeypointInfo>& ideal, const cv::Mat& image,
+                                       bool patch_look,
                                        std::vector<KeypointPrediction>& predictions,
                                        int& from_tracks) {
   const Previous& prev = *previous_;
@@ -172,7 +173,7 @@ std::vector<Match> FrontEnd::MatchPass(const CameraMotion& motion, const Feature
   MatchResult r = MatchGuided(
       *guided_predictions, prev.ideal, DescriptorView::FromMat(prev.features.descriptors), ideal,
       grid, DescriptorView::FromMat(features.descriptors), options_.guided, &scratch);
-  if (options_.patch_second_look) {
+  if (patch_look && options_.patch_second_look) {
     MatchByPatch(*guided_predictions, prev.ideal, prev.features.keypoints,
                  DescriptorView::FromMat(prev.features.descriptors), ideal, grid,
                  features.keypoints, DescriptorView::FromMat(features.descriptors), prev.image,
@@ -273,8 +274,8 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
       prev.features.keypoints.size() >= 2 && features.keypoints.size() >= 2;
   std::vector<KeypointPrediction> predictions;
   if (imu_ok && enough_features) {
-    result.matches_pass1 =
-        MatchPass(result.imu_motion, features, ideal, gray, predictions, result.from_tracks);
+    result.matches_pass1 = MatchPass(result.imu_motion, features, ideal, gray,
+                                     !options_.second_pass, predictions, result.from_tracks);
   }
   result.status = FrameStatus::kGuided;
   if (!imu_ok || !enough_features ||
@@ -363,7 +364,8 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
     }
     std::vector<KeypointPrediction> predictions2;
     int tracks2 = 0;
-    std::vector<Match> second = MatchPass(refined, features, ideal, gray, predictions2, tracks2);
+    std::vector<Match> second =
+        MatchPass(refined, features, ideal, gray, true, predictions2, tracks2);
     // Keep the matches the fitted geometry explains: reprojection (with depth) or epipolar
     // distance (without) within the fit's inlier threshold, in ideal pixels.
     const Eigen::Matrix3d rf = fitted.rotation.toRotationMatrix();

@@ -49,8 +49,11 @@ struct FrontEndOptions {
   bool refine_subpixel = true;
   SubpixelOptions subpixel;
   // The queries the guided search left unmatched with candidates in their window are looked at
-  // again by the image patch (MatchByPatch): A's patch, warped as the IMU predicts, aligned at
-  // each candidate.
+  // again by the image patch (MatchByPatch): A's patch, warped as predicted, aligned at each
+  // candidate. In the final pass only (the second, or the first when there is none): the pose
+  // fit between the passes rests on the descriptors' matches. In windows the IMU's motion has
+  // misplaced (a synthetic walk coming to a stop with the velocity off by 1 m/s), a textured
+  // scene showed a patch at one wrong candidate often enough to spoil that fit.
   bool patch_second_look = true;
   PatchMatchingOptions patch;
   KltOptions klt;
@@ -141,9 +144,11 @@ class FrontEnd {
     Rigid3d world_from_cam;
   };
   void Initialise(int64_t t_ns, FrontEndResult& result);
+  // patch_look: add MatchByPatch's matches (options_.patch_second_look permitting).
   std::vector<Match> MatchPass(const CameraMotion& motion, const Features& features,
                                const std::vector<KeypointInfo>& ideal, const cv::Mat& image,
-                               std::vector<KeypointPrediction>& predictions, int& from_tracks);
+                               bool patch_look, std::vector<KeypointPrediction>& predictions,
+                               int& from_tracks);
 
   PixelUndistorter undistorter_;
   ImuParams imu_params_;
