@@ -4,7 +4,6 @@
 #include <utility>
 
 #include "imumatch/core/time.h"
-#include "imumatch/features/image_util.h"
 #include "imumatch/frontend/motion_refit.h"
 #include "imumatch/matching/baseline_matchers.h"
 #include "imumatch/matching/grid_index.h"
@@ -161,11 +160,10 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
   if (method == MatchMethod::kGuided && options.patch_second_look) {
     t0 = Clock::now();
     std::vector<QueryOutcome> before = result.outcomes;
-    run.patch = MatchByPatch(
-        predictions, ca.ideal, fa.keypoints, DescriptorView::FromMat(fa.descriptors), cb.ideal,
-        grid_b, fb.keypoints, DescriptorView::FromMat(fb.descriptors),
-        ToGray8(image_a.image, "patch matching"), ToGray8(image_b.image, "patch matching"), camera,
-        options.guided, options.patch, &result);
+    run.patch =
+        MatchByPatch(predictions, ca.ideal, fa.keypoints, DescriptorView::FromMat(fa.descriptors),
+                     cb.ideal, grid_b, fb.keypoints, DescriptorView::FromMat(fb.descriptors),
+                     image_a.image, image_b.image, camera, options.guided, options.patch, &result);
     run.patch_ms = MsSince(t0);
     run.match_ms += run.patch_ms;
     patch_query.assign(before.size(), 0);
