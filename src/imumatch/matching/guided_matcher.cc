@@ -188,7 +188,12 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
           result.outcomes[i] = QueryOutcome::kNoPrediction;
           continue;
       }
-      cell[i] = grid_b.CellOf(0.5f * (p.min_x + p.max_x), 0.5f * (p.min_y + p.max_y));
+      const float centre_x = 0.5f * (p.min_x + p.max_x), centre_y = 0.5f * (p.min_y + p.max_y);
+      IMUMATCH_CHECK(std::isfinite(centre_x) && std::isfinite(centre_y),
+                     "prediction " << i << " has a window that is not finite: x [" << p.min_x
+                                   << ", " << p.max_x << "], y [" << p.min_y << ", " << p.max_y
+                                   << "]");
+      cell[i] = grid_b.CellOf(centre_x, centre_y);
       ++start[cell[i] + 1];
     }
     for (int c = 0; c < cells; ++c) start[c + 1] += start[c];

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <random>
 
@@ -574,6 +575,14 @@ TEST(GuidedMatcherTest, CheckAndInputValidation) {
   grid.Build(s.kps_b, 640, 480, 24.0f);
   std::vector<KeypointPrediction> too_few(3);
   EXPECT_THROW(MatchGuided(too_few, s.kps_a, DescriptorView::FromMat(s.desc_a), s.kps_b, grid,
+                           DescriptorView::FromMat(s.desc_b), GuidedMatcherOptions()),
+               InvalidArgument);
+  // A window that is not finite (a caller's own predictions) is refused, not indexed.
+  std::vector<KeypointPrediction> nan_window =
+      PredictKeypoints(s.camera, s.motion, s.kps_a, s.depth_a, PredictionOptions());
+  ASSERT_EQ(nan_window[4].status, PredictionStatus::kWithDepth);
+  nan_window[4].min_x = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(MatchGuided(nan_window, s.kps_a, DescriptorView::FromMat(s.desc_a), s.kps_b, grid,
                            DescriptorView::FromMat(s.desc_b), GuidedMatcherOptions()),
                InvalidArgument);
   // cv adapter end to end: depth image in metres.

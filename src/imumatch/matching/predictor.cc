@@ -14,10 +14,14 @@ namespace {
 constexpr double kMinForwardDepth = 1e-6;  // q_z below this counts as behind camera B
 constexpr double kRadToDeg = 57.29577951308232;
 
+// Of the symmetric part: a covariance summed from products can come out asymmetric in its last
+// bits, and c01 * c10 < 0 then put a negative under the root of an isotropic one (NaN windows for
+// a pure rotation without depth).
 double MaxEigenvalue(const Eigen::Matrix2d& c) {
   const double half_trace = 0.5 * (c(0, 0) + c(1, 1));
   const double half_diff = 0.5 * (c(0, 0) - c(1, 1));
-  return half_trace + std::sqrt(half_diff * half_diff + c(0, 1) * c(1, 0));
+  const double off = 0.5 * (c(0, 1) + c(1, 0));
+  return half_trace + std::sqrt(half_diff * half_diff + off * off);
 }
 
 // Liang-Barsky: clips the segment p0 + s (p1 - p0), s in [0, 1], to the box. False when empty.

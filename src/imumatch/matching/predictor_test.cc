@@ -140,6 +140,54 @@ TEST(PredictorTest, RotationOnlyIsTheInfiniteHomography) {
   EXPECT_NEAR(rolled.Predict({500, 100}, 2.0).angle_change_deg, 10.0, 1e-4);
 }
 
+// A camera that only turns (a roll about its optical axis, exactly known: zero covariance) and
+// keypoints without depth: each epipolar segment is one point, and the window is the keypoints'
+// noise alone, isotropic. Its largest eigenvalue once came out NaN for some keypoints (the
+// covariance's off-diagonal terms differed in sign in their last bits), which made MatchGuided
+// read outside its arrays.
+TEST(PredictorTest, PureRotationWithoutDepthGivesFiniteWindowsAroundTheTruth) {
+  PinholeCamera vga = TestCamera();
+  vga.fy = vga.fx;
+  PinholeCamera small;  // the camera of the case that failed
+  small.width = 320;
+  small.height = 240;
+  small.fx = small.fy = 300.0;
+  small.cx = 160.0;
+  small.cy = 120.0;
+  const double a = 20.0 * M_PI / 180.0;
+  const Eigen::Quaterniond roll(Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()));
+  int checked = 0;
+  for (const PinholeCamera& cam : {vga, small}) {
+    const KeypointPredictor predictor(cam, MakeMotion(roll, Eigen::Vector3d::Zero()),
+                                      PredictionOptions());
+    for (const double sigma_scale : {1.0, 1.0796, 1.5}) {
+      for (double v = 3.0; v < cam.height; v += 3.7) {
+        for (double u = 3.0; u < cam.width; u += 3.9) {
+          // Hand check: the image turns by a about the principal point.
+          const Eigen::Vector2d d(u - cam.cx, v - cam.cy);
+          const Eigen::Vector2d truth(cam.cx + std::cos(a) * d.x() - std::sin(a) * d.y(),
+                                      cam.cy + std::sin(a) * d.x() + std::cos(a) * d.y());
+          if (truth.x() < 0.0 || truth.y() < 0.0 || truth.x() > cam.width - 1.0 ||
+              truth.y() > cam.height - 1.0) {
+            continue;
+          }
+          const KeypointPrediction p = predictor.Predict({u, v}, 0.0, sigma_scale);
+          ASSERT_EQ(p.status, PredictionStatus::kWithoutDepth) << u << " " << v;
+          ASSERT_TRUE(std::isfinite(p.radius) && std::isfinite(p.min_x) && std::isfinite(p.max_x) &&
+                      std::isfinite(p.min_y) && std::isfinite(p.max_y))
+              << cam.width << " px wide, at " << u << " " << v << ": radius " << p.radius;
+          EXPECT_GE(p.radius, PredictionOptions().min_half_size);
+          EXPECT_NEAR(p.uv.x(), truth.x(), 1e-3);
+          EXPECT_NEAR(p.uv.y(), truth.y(), 1e-3);
+          EXPECT_TRUE(p.Contains(static_cast<float>(truth.x()), static_cast<float>(truth.y())));
+          ++checked;
+        }
+      }
+    }
+  }
+  EXPECT_GT(checked, 30000);
+}
+
 TEST(PredictorTest, EpipolarSegmentContainsTrueProjectionForDepthsInRange) {
   const PinholeCamera cam = TestCamera();
   const CameraMotion motion = MakeMotion(FromEulerZYX(0.01, 0.02, -0.01), {0.15, 0.02, 0.05});
