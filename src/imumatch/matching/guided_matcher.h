@@ -133,6 +133,9 @@ class GuidedMatcherWorkspace {
   // The keypoints of the last call in ideal pixels.
   const std::vector<KeypointInfo>& ideal_keypoints_a() const { return info_a_; }
   const std::vector<KeypointInfo>& ideal_keypoints_b() const { return info_b_; }
+  // The grid over the last call's frame B (ideal pixels), for the second look by the image patch
+  // (patch_matching.h's MatchByPatch taking a workspace).
+  const GridIndex& grid_b() const { return grid_; }
 
  private:
   const PixelUndistorter& UndistorterFor(const PinholeCamera& camera);

@@ -223,4 +223,24 @@ PatchMatchingStats MatchByPatch(
   return stats;
 }
 
+PatchMatchingStats MatchByPatch(const GuidedMatcherWorkspace& workspace,
+                                const std::vector<cv::KeyPoint>& keypoints_a,
+                                const cv::Mat& descriptors_a,
+                                const std::vector<cv::KeyPoint>& keypoints_b,
+                                const cv::Mat& descriptors_b, const cv::Mat& gray_a,
+                                const cv::Mat& gray_b, const PinholeCamera& camera,
+                                const GuidedMatcherOptions& guided,
+                                const PatchMatchingOptions& options, MatchResult* result) {
+  IMUMATCH_CHECK(keypoints_a.size() == workspace.ideal_keypoints_a().size() &&
+                     keypoints_b.size() == workspace.ideal_keypoints_b().size(),
+                 "MatchByPatch: " << keypoints_a.size() << " / " << keypoints_b.size()
+                                  << " keypoints, but the workspace's last Match() had "
+                                  << workspace.ideal_keypoints_a().size() << " / "
+                                  << workspace.ideal_keypoints_b().size());
+  return MatchByPatch(workspace.predictions(), workspace.ideal_keypoints_a(), keypoints_a,
+                      DescriptorView::FromMat(descriptors_a), workspace.ideal_keypoints_b(),
+                      workspace.grid_b(), keypoints_b, DescriptorView::FromMat(descriptors_b),
+                      gray_a, gray_b, camera, guided, options, result);
+}
+
 }  // namespace imumatch

@@ -79,4 +79,23 @@ PatchMatchingStats MatchByPatch(
     const cv::Mat& gray_a, const cv::Mat& gray_b, const PinholeCamera& camera,
     const GuidedMatcherOptions& guided, const PatchMatchingOptions& options, MatchResult* result);
 
+// The same after GuidedMatcherWorkspace::Match: its predictions, keypoints in ideal pixels and grid
+// over B, with the keypoints and descriptors the call was given. result is that call's output.
+// The per-frame loop of a caller with images:
+//   MatchResult r = workspace.Match(camera, motion, kps_a, desc_a, depth_a, kps_b, desc_b, po, mo);
+//   MatchByPatch(workspace, kps_a, desc_a, kps_b, desc_b, gray_a, gray_b, camera, mo,
+//                PatchMatchingOptions(), &r);
+//   RefineMatches(gray_a, gray_b, kps_a, kps_b, workspace.predictions(), camera,
+//                 SubpixelOptions(), r.matches);   // subpixel_refinement.h
+// Throws InvalidArgument when the keypoints are not the ones of the workspace's last call (their
+// counts differ).
+PatchMatchingStats MatchByPatch(const GuidedMatcherWorkspace& workspace,
+                                const std::vector<cv::KeyPoint>& keypoints_a,
+                                const cv::Mat& descriptors_a,
+                                const std::vector<cv::KeyPoint>& keypoints_b,
+                                const cv::Mat& descriptors_b, const cv::Mat& gray_a,
+                                const cv::Mat& gray_b, const PinholeCamera& camera,
+                                const GuidedMatcherOptions& guided,
+                                const PatchMatchingOptions& options, MatchResult* result);
+
 }  // namespace imumatch

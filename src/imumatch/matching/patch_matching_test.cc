@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include <gtest/gtest.h>
+#include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "imumatch/core/error.h"
@@ -190,6 +191,68 @@ TEST(PatchMatchingTest, TheDescriptorThresholdGuardsWhenAskedTo) {
   PatchMatchingOptions o;
   o.require_distance_threshold = true;
   EXPECT_EQ(MatchAll(q, s, o).matched, 0);
+}
+
+// The library's per-frame loop: GuidedMatcherWorkspace::Match, then the second look taking the
+// workspace. A camera rolls 20 deg about its optical axis (principal point at the image centre,
+// no lens distortion): frame B is frame A turned about the principal point, so Scene::Map is the
+// exact motion of every pixel. B also carries sensor noise, which moves ORB's descriptors more
+// than the patches' correlation. Every match the look adds is judged against Map.
+TEST(PatchMatchingTest, AfterTheWorkspacesMatchItAddsTrueMatches) {
+  Scene s = MakeScene(20.0, Eigen::Vector2f::Zero());
+  cv::Mat noise(s.b.size(), CV_16S);
+  cv::RNG rng(11);
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, 6.0);
+  cv::Mat b16;
+  s.b.convertTo(b16, CV_16S);
+  cv::Mat(b16 + noise).convertTo(s.b, CV_8U);  // saturating
+  PinholeCamera camera = Camera();
+  camera.fx = camera.fy = 300.0;
+  camera.cx = 160.0;  // the turn's centre
+  camera.cy = 120.0;
+  const double th = 20.0 * M_PI / 180.0;
+  CameraMotion motion;
+  motion.t_b_ns = 50'000'000;
+  motion.cam_b_from_cam_a = Rigid3d(
+      Eigen::Matrix3d(Eigen::AngleAxisd(th, Eigen::Vector3d::UnitZ())), Eigen::Vector3d::Zero());
+  const cv::Ptr<cv::ORB> orb = cv::ORB::create(500);
+  std::vector<cv::KeyPoint> kps_a, kps_b;
+  cv::Mat desc_a, desc_b;
+  orb->detectAndCompute(s.a, cv::noArray(), kps_a, desc_a);
+  orb->detectAndCompute(s.b, cv::noArray(), kps_b, desc_b);
+  ASSERT_GT(kps_a.size(), 300u);
+  GuidedMatcherWorkspace workspace;
+  const GuidedMatcherOptions guided;
+  MatchResult r = workspace.Match(camera, motion, kps_a, desc_a, cv::Mat(), kps_b, desc_b,
+                                  PredictionOptions(), guided);
+  const auto close_to_truth = [&](const Match& m, const Eigen::Vector2f& uv_b) {
+    const cv::Point2f& pa = kps_a[static_cast<size_t>(m.query_idx)].pt;
+    return (uv_b - s.Map(Eigen::Vector2f(pa.x, pa.y))).norm() < 1.5f;
+  };
+  int first_correct = 0;
+  for (const Match& m : r.matches) {
+    const cv::Point2f& pb = kps_b[static_cast<size_t>(m.train_idx)].pt;
+    first_correct += close_to_truth(m, Eigen::Vector2f(pb.x, pb.y));
+  }
+  // The prediction holds: most of A's keypoints find their partner by the descriptors.
+  EXPECT_GT(first_correct, static_cast<int>(kps_a.size()) / 3);
+  const std::vector<QueryOutcome> before = r.outcomes;
+  const PatchMatchingStats st = MatchByPatch(workspace, kps_a, desc_a, kps_b, desc_b, s.a, s.b,
+                                             camera, guided, PatchMatchingOptions(), &r);
+  EXPECT_GT(st.matched, 5);
+  int added = 0, added_correct = 0;
+  for (const Match& m : r.matches) {
+    if (before[static_cast<size_t>(m.query_idx)] == QueryOutcome::kMatched) continue;
+    ++added;
+    added_correct += close_to_truth(m, m.refined_uv_b);
+  }
+  EXPECT_EQ(added, st.matched);
+  EXPECT_GE(added_correct, added - 1) << added_correct << " of " << added;
+  // Keypoints that are not the ones of the workspace's last call are refused.
+  std::vector<cv::KeyPoint> fewer(kps_a.begin(), kps_a.end() - 1);
+  EXPECT_THROW(MatchByPatch(workspace, fewer, desc_a.rowRange(0, desc_a.rows - 1), kps_b, desc_b,
+                            s.a, s.b, camera, guided, PatchMatchingOptions(), &r),
+               InvalidArgument);
 }
 
 TEST(PatchMatchingTest, RejectsBadInput) {
