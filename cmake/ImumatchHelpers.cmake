@@ -27,20 +27,36 @@ function(imumatch_add_library NAME)
   set(IMUMATCH_MODULES ${IMUMATCH_MODULES} ${T} CACHE INTERNAL "")
 endfunction()
 
-# imumatch_add_test(NAME SRCS ... LINK ... [LABELS ...])
-# A GoogleTest executable; each TEST is registered with ctest at test time.
+# imumatch_add_test(NAME SRCS ... LINK ... [LABELS ...] [SUITES_IN_ONE_PROCESS ...])
+# A GoogleTest executable; each TEST is registered with ctest at test time. Each suite listed in
+# SUITES_IN_ONE_PROCESS is one ctest test instead (named after the suite, all its TESTs in one
+# process): for suites whose tests share an expensive run through a function-local static (an
+# eval on real data), which one process per TEST would repeat for every TEST.
 function(imumatch_add_test NAME)
   if(NOT IMUMATCH_BUILD_TESTS)
     return()
   endif()
-  cmake_parse_arguments(ARG "" "TIMEOUT" "SRCS;LINK;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "" "TIMEOUT" "SRCS;LINK;LABELS;SUITES_IN_ONE_PROCESS" ${ARGN})
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 300)
   endif()
   add_executable(${NAME} ${ARG_SRCS})
   target_link_libraries(${NAME} PRIVATE ${ARG_LINK} imumatch_testing GTest::gtest GTest::gtest_main GTest::gmock)
   imumatch_warnings(${NAME})
-  gtest_discover_tests(${NAME} DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
+  set(filter "")
+  foreach(suite IN LISTS ARG_SUITES_IN_ONE_PROCESS)
+    list(APPEND filter "${suite}.*")
+    add_test(NAME ${suite} COMMAND ${NAME} --gtest_filter=${suite}.*)
+    # A suite's TESTs one after the other: the time of each TEST, summed.
+    math(EXPR suite_timeout "${ARG_TIMEOUT} * 3")
+    set_tests_properties(${suite} PROPERTIES TIMEOUT ${suite_timeout} LABELS "${ARG_LABELS}")
+  endforeach()
+  set(discover_filter "")
+  if(filter)
+    list(JOIN filter ":" filter)
+    set(discover_filter TEST_FILTER "-${filter}")
+  endif()
+  gtest_discover_tests(${NAME} DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60 ${discover_filter}
                        PROPERTIES TIMEOUT ${ARG_TIMEOUT} LABELS "${ARG_LABELS}")
 endfunction()
 
