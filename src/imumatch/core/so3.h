@@ -5,6 +5,8 @@
 
 namespace imumatch {
 
+inline constexpr double kPi = 3.14159265358979323846;
+
 // Skew-symmetric matrix: Hat(a) * b == a.cross(b).
 Eigen::Matrix3d Hat(const Eigen::Vector3d& v);
 

@@ -89,7 +89,7 @@ Problem MakeProblem(const Scene& s) {
   return p;
 }
 
-PinholeCamera Camera() {
+PinholeCamera SceneCamera() {
   PinholeCamera c;
   c.width = 320;
   c.height = 240;
@@ -100,7 +100,7 @@ PatchMatchingStats MatchAll(Problem& p, const Scene& s,
                             const PatchMatchingOptions& options = PatchMatchingOptions()) {
   return MatchByPatch(p.predictions, p.ideal_a, p.kps_a, DescriptorView::FromMat(p.desc_a),
                       p.ideal_b, p.grid, p.kps_b, DescriptorView::FromMat(p.desc_b), s.a, s.b,
-                      Camera(), GuidedMatcherOptions(), options, &p.result);
+                      SceneCamera(), GuidedMatcherOptions(), options, &p.result);
 }
 
 TEST(PatchMatchingTest, MatchesEachRejectedQueryToItsTruePartnerNotTheDecoy) {
@@ -206,7 +206,7 @@ TEST(PatchMatchingTest, AfterTheWorkspacesMatchItAddsTrueMatches) {
   cv::Mat b16;
   s.b.convertTo(b16, CV_16S);
   cv::Mat(b16 + noise).convertTo(s.b, CV_8U);  // saturating
-  PinholeCamera camera = Camera();
+  PinholeCamera camera = SceneCamera();
   camera.fx = camera.fy = 300.0;
   camera.cx = 160.0;  // the turn's centre
   camera.cy = 120.0;
@@ -263,8 +263,8 @@ TEST(PatchMatchingTest, RejectsBadInput) {
   Problem q = MakeProblem(s);
   EXPECT_THROW(
       MatchByPatch(q.predictions, q.ideal_a, q.kps_a, DescriptorView::FromMat(q.desc_a), q.ideal_b,
-                   q.grid, q.kps_b, DescriptorView::FromMat(q.desc_b), s.a, cv::Mat(), Camera(),
-                   GuidedMatcherOptions(), PatchMatchingOptions(), &q.result),
+                   q.grid, q.kps_b, DescriptorView::FromMat(q.desc_b), s.a, cv::Mat(),
+                   SceneCamera(), GuidedMatcherOptions(), PatchMatchingOptions(), &q.result),
       InvalidArgument);
   PatchMatchingOptions o;
   o.min_correlation = 1.5;

@@ -11,7 +11,6 @@
 namespace imumatch {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kDegToRad = kPi / 180.0;
 
 // Integral of the minimum-jerk step from 0 to tau (tau in [0, 1]).

@@ -10,8 +10,6 @@
 namespace imumatch {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 class MotionDerivativesTest : public ::testing::TestWithParam<std::string> {};
 
 // The analytic derivatives match central finite differences of the pose.

@@ -8,16 +8,10 @@
 #include <vector>
 
 #include "imumatch/core/error.h"
+#include "imumatch/sim/seed_mix.h"
 
 namespace imumatch {
 namespace {
-
-uint64_t SplitMix64(uint64_t x) {
-  x += 0x9E3779B97F4A7C15ULL;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
-  return x ^ (x >> 31);
-}
 
 // Bilinear sample of one mip level at level-0 texel coordinates (s, t); accumulates weight * BGR.
 inline void SampleLevel(const cv::Mat& level, double scale, double s, double t, float weight,

@@ -9,13 +9,12 @@
 #include <opencv2/imgproc.hpp>
 
 #include "imumatch/core/error.h"
+#include "imumatch/core/so3.h"
 #include "imumatch/sim/motions.h"
 #include "imumatch/sim/scene.h"
 
 namespace imumatch {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // 320 x 240 with the Kinect field of view.
 PinholeCamera HalfCamera() { return PinholeCamera::KinectDefault().ScaledToWidth(320); }

@@ -8,18 +8,11 @@
 #include <opencv2/imgproc.hpp>
 
 #include "imumatch/core/error.h"
+#include "imumatch/core/so3.h"
+#include "imumatch/sim/seed_mix.h"
 
 namespace imumatch {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-
-uint64_t SplitMix64(uint64_t x) {
-  x += 0x9E3779B97F4A7C15ULL;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
-  return x ^ (x >> 31);
-}
 
 SceneBox MakeBox(double x, double y, double z, double sx, double sy, double sz, double yaw_deg) {
   SceneBox box;

@@ -12,8 +12,6 @@
 namespace imumatch {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 const Scene& CoarseScene() {
   static const Scene scene = [] {
     SceneOptions options;
