@@ -27,8 +27,6 @@ struct ImuArgs {
   std::string mode = "so3";
 };
 
-constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
-
 void RunImu(const ImuArgs& a) {
   IMUMATCH_CHECK(a.still_s > 0.0, "--still must be > 0");
   DatasetOptions options;

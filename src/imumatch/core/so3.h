@@ -6,6 +6,8 @@
 namespace imumatch {
 
 inline constexpr double kPi = 3.14159265358979323846;
+inline constexpr double kRadToDeg = 180.0 / kPi;
+inline constexpr double kDegToRad = kPi / 180.0;
 
 // Skew-symmetric matrix: Hat(a) * b == a.cross(b).
 Eigen::Matrix3d Hat(const Eigen::Vector3d& v);

@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "imumatch/core/error.h"
+#include "imumatch/core/so3.h"
 #include "imumatch/features/image_util.h"
 
 namespace imumatch {
@@ -26,7 +27,7 @@ class NormalSource {
     const double u1 = (static_cast<double>(engine_()) + 0.5) / 4294967296.0;
     const double u2 = (static_cast<double>(engine_()) + 0.5) / 4294967296.0;
     const double radius = std::sqrt(-2.0 * std::log(u1));
-    const double phase = 2.0 * 3.14159265358979323846 * u2;
+    const double phase = 2.0 * kPi * u2;
     spare_ = radius * std::sin(phase);
     has_spare_ = true;
     return radius * std::cos(phase);

@@ -9,13 +9,11 @@
 #include <opencv2/core/utility.hpp>
 
 #include "imumatch/core/error.h"
+#include "imumatch/core/so3.h"
 #include "imumatch/features/image_util.h"
 
 namespace imumatch {
 namespace {
-
-constexpr float kRadToDeg = 57.29577951308232f;
-constexpr float kDegToRad = 0.017453292519943295f;
 
 // Integral image in wrap-around uint32 arithmetic: the difference of four entries is the exact box
 // sum whenever the box sum itself fits in 31 bits (any box below 8.4 million pixels), whatever the
@@ -429,7 +427,7 @@ bool DominantOrientation(const IntegralImage& ii, const cv::KeyPoint& kp, float*
       best_y = sy;
     }
   }
-  float a = std::atan2(best_y, best_x) * kRadToDeg;
+  float a = std::atan2(best_y, best_x) * static_cast<float>(kRadToDeg);
   if (a < 0.f) a += 360.f;
   if (a >= 360.f) a -= 360.f;
   *angle_deg = a;
@@ -443,7 +441,7 @@ bool DominantOrientation(const IntegralImage& ii, const cv::KeyPoint& kp, float*
 bool ComputeDescriptor(const IntegralImage& ii, const cv::KeyPoint& kp, float* out) {
   const float s = 1.2f * kp.size / 9.f;
   const int half = std::max(1, static_cast<int>(std::lround(s)));
-  const float angle = kp.angle * kDegToRad;
+  const float angle = kp.angle * static_cast<float>(kDegToRad);
   const float co = std::cos(angle);
   const float si = std::sin(angle);
   const std::array<float, 400>& weights = DescriptorWeights();

@@ -12,7 +12,6 @@ namespace imumatch {
 
 namespace {
 constexpr double kMinForwardDepth = 1e-6;  // q_z below this counts as behind camera B
-constexpr double kRadToDeg = 57.29577951308232;
 
 // Of the symmetric part: a covariance summed from products can come out asymmetric in its last
 // bits, and c01 * c10 < 0 then put a negative under the root of an isotropic one (NaN windows for

@@ -11,8 +11,6 @@
 namespace imumatch {
 namespace {
 
-constexpr double kDegToRad = kPi / 180.0;
-
 // Integral of the minimum-jerk step from 0 to tau (tau in [0, 1]).
 double MinimumJerkIntegral(double tau) {
   if (tau <= 0.0) return 0.0;
