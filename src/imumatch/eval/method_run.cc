@@ -88,10 +88,13 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
   GridIndex grid_b;
   grid_b.Build(cb.ideal, camera.width, camera.height,
                static_cast<float>(options.guided.grid_cell_size));
+  // B in the grid's order, prepared once for the pilot and every pass.
+  GuidedCandidates candidates_b;
+  PrepareGuidedCandidates(cb.ideal, grid_b, DescriptorView::FromMat(fb.descriptors), &candidates_b);
   GuidedSearchScratch scratch;
-  run.scene_near = PredictKeypointsInScene(
-      predictor, ca.ideal, depths, DescriptorView::FromMat(fa.descriptors), cb.ideal, grid_b,
-      DescriptorView::FromMat(fb.descriptors), options.guided, &predictions, &scratch);
+  run.scene_near =
+      PredictKeypointsInScene(predictor, ca.ideal, depths, DescriptorView::FromMat(fa.descriptors),
+                              cb.ideal, candidates_b, options.guided, &predictions, &scratch);
   run.predict_ms = MsSince(t0) + cb.ideal_ms;
   if (IsTracking(method)) {
     // Frame A's pyramid would be frame B's of the previous pair in a stream: not charged.
@@ -107,10 +110,9 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
     if (method == MatchMethod::kKlt) return run;
     // Hybrid: guided matching for the keypoints whose track failed, inside the same windows.
     t0 = Clock::now();
-    MatchResult result =
-        MatchGuided(PredictionsOfFailedTracks(predictions, tracks), ca.ideal,
-                    DescriptorView::FromMat(fa.descriptors), cb.ideal, grid_b,
-                    DescriptorView::FromMat(fb.descriptors), options.guided, &scratch);
+    MatchResult result = MatchGuided(PredictionsOfFailedTracks(predictions, tracks), ca.ideal,
+                                     DescriptorView::FromMat(fa.descriptors), candidates_b,
+                                     options.guided, &scratch);
     if (options.refine_subpixel) {
       run.refine_stats = RefineMatches(image_a.image, image_b.image, fa.keypoints, fb.keypoints,
                                        predictions, camera, options.subpixel, result.matches);
@@ -122,9 +124,8 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
     return run;
   }
   t0 = Clock::now();
-  MatchResult result =
-      MatchGuided(predictions, ca.ideal, DescriptorView::FromMat(fa.descriptors), cb.ideal, grid_b,
-                  DescriptorView::FromMat(fb.descriptors), options.guided, &scratch);
+  MatchResult result = MatchGuided(predictions, ca.ideal, DescriptorView::FromMat(fa.descriptors),
+                                   candidates_b, options.guided, &scratch);
   run.match_ms = MsSince(t0);
   if (options.second_pass && method == MatchMethod::kGuided) {
     // Second pass: the motion fitted to the first pass's matches, windows from its covariance,
@@ -150,9 +151,8 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
     if (run.second_pass == SecondPassOutcome::kRan) {
       predictions.swap(second);
       t0 = Clock::now();
-      result =
-          MatchGuided(predictions, ca.ideal, DescriptorView::FromMat(fa.descriptors), cb.ideal,
-                      grid_b, DescriptorView::FromMat(fb.descriptors), options.guided, &scratch);
+      result = MatchGuided(predictions, ca.ideal, DescriptorView::FromMat(fa.descriptors),
+                           candidates_b, options.guided, &scratch);
       run.match_ms += MsSince(t0);
     }
   }

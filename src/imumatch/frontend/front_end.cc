@@ -151,11 +151,12 @@ std::vector<Match> FrontEnd::MatchPass(const CameraMotion& motion, const Feature
   GridIndex grid;
   grid.Build(ideal, camera.width, camera.height,
              static_cast<float>(options_.guided.grid_cell_size));
+  GuidedCandidates candidates;  // B prepared once for the pilot and the search
+  PrepareGuidedCandidates(ideal, grid, DescriptorView::FromMat(features.descriptors), &candidates);
   GuidedSearchScratch scratch;
   PredictKeypointsInScene(KeypointPredictor(undistorter_, motion, options_.prediction), prev.ideal,
                           prev.depths, DescriptorView::FromMat(prev.features.descriptors), ideal,
-                          grid, DescriptorView::FromMat(features.descriptors), options_.guided,
-                          &predictions, &scratch);
+                          candidates, options_.guided, &predictions, &scratch);
   std::vector<Match> out;
   std::vector<KeypointPrediction> rest;
   const std::vector<KeypointPrediction>* guided_predictions = &predictions;
@@ -170,9 +171,9 @@ std::vector<Match> FrontEnd::MatchPass(const CameraMotion& motion, const Feature
     from_tracks = static_cast<int>(tracks.tracks.size());
     out = std::move(tracks.tracks);
   }
-  MatchResult r = MatchGuided(
-      *guided_predictions, prev.ideal, DescriptorView::FromMat(prev.features.descriptors), ideal,
-      grid, DescriptorView::FromMat(features.descriptors), options_.guided, &scratch);
+  MatchResult r = MatchGuided(*guided_predictions, prev.ideal,
+                              DescriptorView::FromMat(prev.features.descriptors), candidates,
+                              options_.guided, &scratch);
   if (patch_look && options_.patch_second_look) {
     MatchByPatch(*guided_predictions, prev.ideal, prev.features.keypoints,
                  DescriptorView::FromMat(prev.features.descriptors), ideal, grid,

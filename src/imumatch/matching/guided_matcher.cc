@@ -37,12 +37,6 @@ inline float InfIf(int flag) {
   return f;
 }
 
-// An angle in [0, 360) (NaN stays NaN).
-float NormalizeDegrees(float a) {
-  if (a >= 360.0f || a < 0.0f) a -= 360.0f * std::floor(a / 360.0f);
-  return a < 360.0f ? a : 0.0f;  // a tiny negative a rounds up to 360
-}
-
 }  // namespace
 
 MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
@@ -62,17 +56,28 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
                         const DescriptorView& descriptors_b, const GuidedMatcherOptions& options,
                         GuidedSearchScratch* scratch) {
   IMUMATCH_CHECK(scratch != nullptr, "MatchGuided needs a scratch");
+  PrepareGuidedCandidates(keypoints_b, grid_b, descriptors_b, &scratch->candidates);
+  return MatchGuided(predictions, keypoints_a, descriptors_a, scratch->candidates, options,
+                     scratch);
+}
+
+MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
+                        const std::vector<KeypointInfo>& keypoints_a,
+                        const DescriptorView& descriptors_a, const GuidedCandidates& candidates_b,
+                        const GuidedMatcherOptions& options, GuidedSearchScratch* scratch) {
+  IMUMATCH_CHECK(scratch != nullptr, "MatchGuided needs a scratch");
+  IMUMATCH_CHECK(candidates_b.grid != nullptr, "MatchGuided: frame B was not prepared");
   options.Check();
+  const GridIndex& grid_b = *candidates_b.grid;
   const int n = static_cast<int>(keypoints_a.size());
-  const int m = static_cast<int>(keypoints_b.size());
+  const int m = candidates_b.count();
   IMUMATCH_CHECK(static_cast<int>(predictions.size()) == n,
                  predictions.size() << " predictions for " << n << " keypoints");
   IMUMATCH_CHECK(descriptors_a.rows == n,
                  descriptors_a.rows << " descriptors for " << n << " keypoints in A");
-  IMUMATCH_CHECK(descriptors_b.rows == m,
-                 descriptors_b.rows << " descriptors for " << m << " keypoints in B");
-  IMUMATCH_CHECK(grid_b.size() == m, "grid holds " << grid_b.size() << " points, B has " << m);
-  CheckCompatible(descriptors_a, descriptors_b);
+  IMUMATCH_CHECK(grid_b.size() == m,
+                 "grid holds " << grid_b.size() << " points, the prepared B has " << m);
+  CheckCompatible(descriptors_a, candidates_b.descriptor_view());
 
   MatchResult result;
   MatchStats& stats = result.stats;
@@ -97,41 +102,16 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
   const float inf = std::numeric_limits<float>::infinity();
   const bool rivals_all = options.inconsistent_candidates_in_ratio;
 
-  // B's keypoints (x, y, angle, size, one array each) and descriptors copied into the grid's cell
-  // order: a window's candidates are then contiguous runs of slots, tested 16 or 8 at a time
-  // (window_scan.h; O(m) copy, a few us per 1000). Angles are normalised into [0, 360) once here
-  // (no angle: -1), sizes that are not positive numbers become 0 (no size check), as the tests
-  // expect.
-  std::vector<float>&cand_x = scratch->candidate_x, &cand_y = scratch->candidate_y,
-  &cand_angle = scratch->candidate_angle_deg, &cand_size = scratch->candidate_size;
-  std::vector<uint8_t>& desc_b = scratch->desc_b;
-  cand_x.resize(m);
-  cand_y.resize(m);
-  cand_angle.resize(m);
-  cand_size.resize(m);
-  desc_b.resize(static_cast<size_t>(m) * bytes);
-  constexpr int kPrefetchAhead = 8;  // rows are read in slot order: a random gather over B
-  for (int k = 0; k < m; ++k) {
-    if (k + kPrefetchAhead < m) {
-      const int ahead = grid_b.slot_index(k + kPrefetchAhead);
-      __builtin_prefetch(&keypoints_b[ahead]);
-      const uint8_t* row = descriptors_b.Row(ahead);
-      for (int b = 0; b < bytes; b += 64) __builtin_prefetch(row + b);
-    }
-    const int j = grid_b.slot_index(k);
-    const KeypointInfo& kb = keypoints_b[j];
-    cand_x[k] = kb.x;
-    cand_y[k] = kb.y;
-    cand_angle[k] = kb.angle_deg >= 0.0f && std::isfinite(kb.angle_deg)
-                        ? NormalizeDegrees(kb.angle_deg)
-                        : -1.0f;
-    cand_size[k] = kb.size > 0.0f ? kb.size : 0.0f;
-    std::memcpy(desc_b.data() + static_cast<size_t>(k) * bytes, descriptors_b.Row(j), bytes);
-  }
+  // B's keypoints and descriptors in the grid's slot order (PrepareGuidedCandidates): a window's
+  // candidates are contiguous runs of slots, tested 16 or 8 at a time (window_scan.h).
+  const std::vector<float>&cand_x = candidates_b.x, &cand_y = candidates_b.y,
+        &cand_size = candidates_b.size;
+  const uint8_t* const desc_b = candidates_b.descriptors.data();
+  constexpr int kPrefetchAhead = 8;
   CandidateView view;
   view.x = cand_x.data();
   view.y = cand_y.data();
-  view.angle_deg = cand_angle.data();
+  view.angle_deg = candidates_b.angle_deg.data();
   view.size = cand_size.data();
   const WindowScanFn box_test = SelectWindowScan(false, options.kernel);
   const WindowScanFn capsule_test = SelectWindowScan(true, options.kernel);
@@ -149,7 +129,7 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
   const int rivals_all_bit = rivals_all ? 1 : 0;
   const bool dedup = options.duplicate_radius_px > 0.0;
   const float dup_radius = static_cast<float>(options.duplicate_radius_px);
-  const float ref_b = ReferenceKeypointSize(keypoints_b);
+  const float ref_b = candidates_b.reference_size;
 
   // The queries with a window are visited in the grid's cell order of their windows (a counting
   // sort, O(n + cells)): consecutive windows then read neighbouring slots of B, and the per-query
@@ -279,7 +259,7 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
     // Pass 2: the consistent candidates' costs in one call, the best of them (the first of equal
     // costs, in grid order), and the reverse bests of the mutual check.
     if (nc > 0) {
-      cost_gather(da, desc_b.data(), consistent_slot.data(), nc, bytes, consistent_cost.data());
+      cost_gather(da, desc_b, consistent_slot.data(), nc, bytes, consistent_cost.data());
     }
     stats.distances_computed += nc;
     float best = inf;
@@ -343,7 +323,7 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
     if (l2) {
       const float na = squared_norm(da, zeros.data(), bytes);
       const float nb =
-          squared_norm(desc_b.data() + static_cast<size_t>(best_k) * bytes, zeros.data(), bytes);
+          squared_norm(desc_b + static_cast<size_t>(best_k) * bytes, zeros.data(), bytes);
       max_cost = max_l2_rel2 * 0.5f * (na + nb);
     }
     if (best > max_cost) {
@@ -366,7 +346,7 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
           nr += static_cast<int>(dx * dx + dy * dy > dup2);
         }
         if (nr > 0) {
-          cost_gather(da, desc_b.data(), rival_slot.data(), nr, bytes, rival_cost.data());
+          cost_gather(da, desc_b, rival_slot.data(), nr, bytes, rival_cost.data());
           stats.distances_computed += nr;
           float rival = inf;
           for (int j = 0; j < nr; ++j) rival = std::min(rival, rival_cost[j]);
@@ -462,11 +442,12 @@ MatchResult GuidedMatcherWorkspace::Match(const PinholeCamera& camera, const Cam
   for (size_t j = 0; j < keypoints_b.size(); ++j) last_b_[j] = keypoints_b[j].pt;
   grid_.Build(info_b_, camera.width, camera.height,
               static_cast<float>(matcher_options.grid_cell_size));
-  scene_near_ = PredictKeypointsInScene(
-      predictor, info_a_, depths_, DescriptorView::FromMat(descriptors_a), info_b_, grid_,
-      DescriptorView::FromMat(descriptors_b), matcher_options, &predictions_, &scratch_);
-  return MatchGuided(predictions_, info_a_, DescriptorView::FromMat(descriptors_a), info_b_, grid_,
-                     DescriptorView::FromMat(descriptors_b), matcher_options, &scratch_);
+  PrepareGuidedCandidates(info_b_, grid_, DescriptorView::FromMat(descriptors_b), &candidates_b_);
+  scene_near_ =
+      PredictKeypointsInScene(predictor, info_a_, depths_, DescriptorView::FromMat(descriptors_a),
+                              info_b_, candidates_b_, matcher_options, &predictions_, &scratch_);
+  return MatchGuided(predictions_, info_a_, DescriptorView::FromMat(descriptors_a), candidates_b_,
+                     matcher_options, &scratch_);
 }
 
 MatchResult MatchFramesGuided(const PinholeCamera& camera, const CameraMotion& motion,

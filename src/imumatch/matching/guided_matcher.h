@@ -9,6 +9,7 @@
 #include "imumatch/matching/brute_force_kernels.h"
 #include "imumatch/matching/descriptor_distance.h"
 #include "imumatch/matching/grid_index.h"
+#include "imumatch/matching/guided_candidates.h"
 #include "imumatch/matching/match_types.h"
 #include "imumatch/matching/predictor.h"
 
@@ -70,14 +71,12 @@ MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
                         const std::vector<KeypointInfo>& keypoints_b, const GridIndex& grid_b,
                         const DescriptorView& descriptors_b, const GuidedMatcherOptions& options);
 
-// The working memory of MatchGuided: B's keypoints and descriptors copied into the grid's slot
-// order, the queries' visiting order, the reverse bests, per-query results (about 100 bytes per
-// keypoint). Passing the same scratch to successive calls (one per thread) reuses it: fresh large
-// buffers every frame cost page faults and zeroing that grow faster than the keypoint count.
+// The working memory of MatchGuided: the queries' visiting order, the reverse bests, per-query
+// results (about 100 bytes per keypoint), and B prepared by the overloads that take B's keypoints
+// (candidates). Passing the same scratch to successive calls (one per thread) reuses it: fresh
+// large buffers every frame cost page faults and zeroing that grow faster than the keypoint count.
 struct GuidedSearchScratch {
-  // B's keypoints as the window tests read them (window_scan.h), one array per field.
-  std::vector<float> candidate_x, candidate_y, candidate_angle_deg, candidate_size;
-  std::vector<uint8_t> desc_b;
+  GuidedCandidates candidates;
   std::vector<float> reverse_cost;
   std::vector<int> reverse_idx;
   std::vector<int> consistent_slot, rival_slot;
@@ -86,6 +85,12 @@ struct GuidedSearchScratch {
   std::vector<int> accepted_slot;
   std::vector<float> accepted_cost, accepted_second;
 };
+// The search against a prepared frame B (the scratch's own candidates are not used).
+MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
+                        const std::vector<KeypointInfo>& keypoints_a,
+                        const DescriptorView& descriptors_a, const GuidedCandidates& candidates_b,
+                        const GuidedMatcherOptions& options, GuidedSearchScratch* scratch);
+// The same, preparing B into scratch->candidates first.
 MatchResult MatchGuided(const std::vector<KeypointPrediction>& predictions,
                         const std::vector<KeypointInfo>& keypoints_a,
                         const DescriptorView& descriptors_a,
@@ -115,7 +120,7 @@ MatchResult MatchFramesGuided(const PinholeCamera& camera, const CameraMotion& m
 
 // Reusable per-frame state for a caller that matches many frames: keeps the keypoint copies (in
 // ideal pixels), depths, predictions, the grid and the camera's PixelUndistorter between calls so
-// their buffers are reused (MatchGuided itself still allocates its O(m) scratch arrays per call).
+// their buffers are reused; frame B is prepared for the search once per call (pilot and search).
 // Predictions and the grid are in ideal pixels (see KeypointPredictor). In a stream (frame B of
 // one call is frame A of the next, with the same keypoint positions) each frame's keypoints are
 // mapped to ideal pixels once.
@@ -146,6 +151,7 @@ class GuidedMatcherWorkspace {
   std::vector<float> depths_;
   std::vector<KeypointPrediction> predictions_;
   GridIndex grid_;
+  GuidedCandidates candidates_b_;  // B prepared once for the pilot and the search
   GuidedSearchScratch scratch_;
   SceneNearDepth scene_near_;
 };

@@ -28,5 +28,13 @@ SceneNearDepth PredictKeypointsInScene(
     const std::vector<KeypointInfo>& keypoints_b, const GridIndex& grid_b,
     const DescriptorView& descriptors_b, const GuidedMatcherOptions& matcher_options,
     std::vector<KeypointPrediction>* predictions, GuidedSearchScratch* scratch);
+// The same against a frame B prepared once (PrepareGuidedCandidates over keypoints_b), which the
+// caller's own searches against B then reuse.
+SceneNearDepth PredictKeypointsInScene(
+    const KeypointPredictor& predictor, const std::vector<KeypointInfo>& keypoints_a,
+    const std::vector<float>& depths_m, const DescriptorView& descriptors_a,
+    const std::vector<KeypointInfo>& keypoints_b, const GuidedCandidates& candidates_b,
+    const GuidedMatcherOptions& matcher_options, std::vector<KeypointPrediction>* predictions,
+    GuidedSearchScratch* scratch);
 
 }  // namespace imumatch
