@@ -77,7 +77,7 @@ TEST(GuidedCandidatesTest, HoldsBInTheGridsSlotOrder) {
 
 // A camera translating past random points with known depths; B holds every point's partner
 // (descriptor with 2 bits flipped) plus as many random distractors, shuffled.
-struct Scene {
+struct PreparedScene {
   PinholeCamera camera = PinholeCamera::KinectDefault();
   CameraMotion motion;
   std::vector<KeypointInfo> kps_a, kps_b;
@@ -86,8 +86,8 @@ struct Scene {
   std::vector<int> partner;
 };
 
-Scene MakeScene(int n, uint32_t seed) {
-  Scene s;
+PreparedScene MakePreparedScene(int n, uint32_t seed) {
+  PreparedScene s;
   s.motion.cam_b_from_cam_a =
       Rigid3d(FromEulerZYX(0.02, -0.01, 0.03), Eigen::Vector3d(0.06, -0.02, 0.04));
   std::mt19937 rng(seed);
@@ -134,7 +134,7 @@ Scene MakeScene(int n, uint32_t seed) {
   return s;
 }
 
-void ExpectSameResult(const MatchResult& a, const MatchResult& b) {
+void ExpectSameSearch(const MatchResult& a, const MatchResult& b) {
   ASSERT_EQ(a.matches.size(), b.matches.size());
   for (size_t k = 0; k < a.matches.size(); ++k) {
     EXPECT_EQ(a.matches[k].query_idx, b.matches[k].query_idx);
@@ -146,7 +146,7 @@ void ExpectSameResult(const MatchResult& a, const MatchResult& b) {
 }
 
 TEST(GuidedCandidatesTest, OnePreparationServesThePilotAndEverySearch) {
-  const Scene s = MakeScene(400, 11);
+  const PreparedScene s = MakePreparedScene(400, 11);
   const GuidedMatcherOptions mo;
   GridIndex grid;
   grid.Build(s.kps_b, s.camera.width, s.camera.height, static_cast<float>(mo.grid_cell_size));
@@ -164,7 +164,7 @@ TEST(GuidedCandidatesTest, OnePreparationServesThePilotAndEverySearch) {
   for (const Match& m : r1.matches) correct += m.train_idx == s.partner[m.query_idx];
   EXPECT_EQ(correct, 400);
   EXPECT_EQ(r1.matches.size(), 400u);
-  ExpectSameResult(r1, MatchGuided(with_depth, s.kps_a, da, s.kps_b, grid, db, mo));
+  ExpectSameSearch(r1, MatchGuided(with_depth, s.kps_a, da, s.kps_b, grid, db, mo));
 
   // Without depth (the scene's pilot runs: 400 keypoints lack depth), the same prepared B.
   const KeypointPredictor predictor(s.camera, s.motion, PredictionOptions());
@@ -192,11 +192,11 @@ TEST(GuidedCandidatesTest, OnePreparationServesThePilotAndEverySearch) {
   for (const Match& m : r2.matches) correct += m.train_idx == s.partner[m.query_idx];
   EXPECT_GE(correct, 390);
   EXPECT_LE(static_cast<int>(r2.matches.size()) - correct, 2);
-  ExpectSameResult(r2, MatchGuided(from_prepared, s.kps_a, da, s.kps_b, grid, db, mo));
+  ExpectSameSearch(r2, MatchGuided(from_prepared, s.kps_a, da, s.kps_b, grid, db, mo));
 }
 
 TEST(GuidedCandidatesTest, RefusesWhatDoesNotFit) {
-  const Scene s = MakeScene(30, 12);
+  const PreparedScene s = MakePreparedScene(30, 12);
   GridIndex grid;
   grid.Build(s.kps_b, s.camera.width, s.camera.height, 8.0f);
   GuidedCandidates c;

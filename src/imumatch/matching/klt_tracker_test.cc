@@ -6,44 +6,15 @@
 #include <opencv2/imgproc.hpp>
 
 #include "imumatch/core/error.h"
+#include "imumatch/matching/matching_test_util.h"
 
 namespace imumatch {
 namespace {
 
-// A smooth random texture (blurred noise), 8-bit, 320 x 240.
-cv::Mat Texture(int seed) {
-  cv::Mat noise(240, 320, CV_32F);
-  cv::RNG rng(static_cast<uint64_t>(seed));
-  rng.fill(noise, cv::RNG::NORMAL, 0.0, 1.0);
-  cv::GaussianBlur(noise, noise, cv::Size(0, 0), 2.0);
-  cv::normalize(noise, noise, 20, 235, cv::NORM_MINMAX);
-  cv::Mat out;
-  noise.convertTo(out, CV_8U);
-  return out;
-}
-
-// B = gain * A moved by the similarity p_b = centre + R(angle) (p_a - centre) + shift, + bias:
-// the exact position in B of every point of A.
-struct Warped {
-  cv::Mat b;
-  Eigen::Matrix2d a;
-  Eigen::Vector2d t;
-  Eigen::Vector2d Map(const Eigen::Vector2d& p) const { return a * p + t; }
-};
-Warped Warp(const cv::Mat& img, double angle_deg, const Eigen::Vector2d& shift, double gain = 1.0,
-            double bias = 0.0) {
-  const double th = angle_deg * M_PI / 180.0;
-  Warped w;
-  w.a << std::cos(th), -std::sin(th), std::sin(th), std::cos(th);
-  const Eigen::Vector2d centre(160.0, 120.0);
-  w.t = centre - w.a * centre + shift;
-  cv::Mat m =
-      (cv::Mat_<double>(2, 3) << w.a(0, 0), w.a(0, 1), w.t.x(), w.a(1, 0), w.a(1, 1), w.t.y());
-  cv::Mat warped;
-  cv::warpAffine(img, warped, m, img.size(), cv::INTER_CUBIC, cv::BORDER_REFLECT);
-  warped.convertTo(w.b, -1, gain, bias);
-  return w;
-}
+// Textures and similarity warps with their exact point maps (matching_test_util.h).
+using testing::SmoothTexture;
+using testing::WarpedImage;
+using testing::WarpSimilarity;
 
 // Keypoints of A on a grid well inside the image (their partners stay inside for the motions
 // below).
@@ -89,7 +60,8 @@ KeypointPrediction AlongX(const Eigen::Vector2f& truth, float before, float afte
   return p;
 }
 
-std::vector<KeypointPrediction> Predictions(const Warped& w, const std::vector<cv::KeyPoint>& kps,
+std::vector<KeypointPrediction> Predictions(const WarpedImage& w,
+                                            const std::vector<cv::KeyPoint>& kps,
                                             const Eigen::Vector2d& error, float half) {
   std::vector<KeypointPrediction> out;
   for (const cv::KeyPoint& k : kps) {
@@ -99,7 +71,7 @@ std::vector<KeypointPrediction> Predictions(const Warped& w, const std::vector<c
 }
 
 // Tracks within tol px of the truth.
-int Correct(const TrackResult& r, const Warped& w, const std::vector<cv::KeyPoint>& kps,
+int Correct(const TrackResult& r, const WarpedImage& w, const std::vector<cv::KeyPoint>& kps,
             double tol) {
   int n = 0;
   for (const Match& m : r.tracks) {
@@ -119,8 +91,8 @@ PixelUndistorter Undistorter() {
 }
 
 TEST(KltTrackerTest, SeededTracksLandOnTheTruth) {
-  const cv::Mat a = Texture(1);
-  const Warped w = Warp(a, 0.0, Eigen::Vector2d(12.3, -7.6));
+  const cv::Mat a = SmoothTexture(1);
+  const WarpedImage w = WarpSimilarity(a, 0.0, 1.0, Eigen::Vector2d(12.3, -7.6));
   const auto kps = GridKeypoints();
   const auto pa = TrackingPyramid::Build(a, 3), pb = TrackingPyramid::Build(w.b, 3);
   // The seed 3 px off, inside a +-6 px window.
@@ -135,9 +107,9 @@ TEST(KltTrackerTest, SeededTracksLandOnTheTruth) {
 }
 
 TEST(KltTrackerTest, InPlaneRotationNeedsThePredictedWarp) {
-  const cv::Mat a = Texture(2);
+  const cv::Mat a = SmoothTexture(2);
   // 22.5 deg about the image centre (a roll of 45 deg/s over 0.5 s).
-  const Warped w = Warp(a, 22.5, Eigen::Vector2d(3.0, 2.0));
+  const WarpedImage w = WarpSimilarity(a, 22.5, 1.0, Eigen::Vector2d(3.0, 2.0));
   const auto kps = GridKeypoints();
   const auto pa = TrackingPyramid::Build(a, 3), pb = TrackingPyramid::Build(w.b, 3);
   const auto preds = Predictions(w, kps, {1.5, -1.0}, 5.0f);
@@ -155,8 +127,8 @@ TEST(KltTrackerTest, InPlaneRotationNeedsThePredictedWarp) {
 }
 
 TEST(KltTrackerTest, ExposureGainAndBiasCancel) {
-  const cv::Mat a = Texture(3);
-  const Warped w = Warp(a, 0.0, Eigen::Vector2d(-4.2, 5.1), 0.6, 12.0);
+  const cv::Mat a = SmoothTexture(3);
+  const WarpedImage w = WarpSimilarity(a, 0.0, 1.0, Eigen::Vector2d(-4.2, 5.1), 0.6, 12.0);
   const auto kps = GridKeypoints();
   const auto pa = TrackingPyramid::Build(a, 3), pb = TrackingPyramid::Build(w.b, 3);
   const TrackResult r =
@@ -165,8 +137,9 @@ TEST(KltTrackerTest, ExposureGainAndBiasCancel) {
 }
 
 TEST(KltTrackerTest, WithoutDepthTheEpipolarSegmentSeedsTheTrack) {
-  const cv::Mat a = Texture(4);
-  const Warped w = Warp(a, 0.0, Eigen::Vector2d(25.0, 0.0));  // the truth 25 px along x
+  const cv::Mat a = SmoothTexture(4);
+  const WarpedImage w =
+      WarpSimilarity(a, 0.0, 1.0, Eigen::Vector2d(25.0, 0.0));  // the truth 25 px along x
   const auto kps = GridKeypoints();
   std::vector<KeypointPrediction> preds;
   for (const cv::KeyPoint& k : kps) {
@@ -185,11 +158,11 @@ TEST(KltTrackerTest, WithoutDepthTheEpipolarSegmentSeedsTheTrack) {
 TEST(KltTrackerTest, RepeatedTextureAlongTheSegmentIsAmbiguous) {
   // A texture repeating every 24 px along x; B is A shifted by 5 px. Each segment spans the truth
   // and both of its repeats 24 px to either side.
-  cv::Mat tile = Texture(9)(cv::Rect(0, 0, 24, 240)).clone();
+  cv::Mat tile = SmoothTexture(9)(cv::Rect(0, 0, 24, 240)).clone();
   cv::Mat a;
   cv::repeat(tile, 1, 14, a);
   a = a(cv::Rect(0, 0, 320, 240)).clone();
-  const Warped w = Warp(a, 0.0, Eigen::Vector2d(5.0, 0.0));
+  const WarpedImage w = WarpSimilarity(a, 0.0, 1.0, Eigen::Vector2d(5.0, 0.0));
   const auto kps = GridKeypoints();
   std::vector<KeypointPrediction> preds;
   for (const cv::KeyPoint& k : kps) {
@@ -206,8 +179,8 @@ TEST(KltTrackerTest, RepeatedTextureAlongTheSegmentIsAmbiguous) {
 }
 
 TEST(KltTrackerTest, TheWindowGatesTracks) {
-  const cv::Mat a = Texture(5);
-  const Warped w = Warp(a, 0.0, Eigen::Vector2d(6.0, 0.0));
+  const cv::Mat a = SmoothTexture(5);
+  const WarpedImage w = WarpSimilarity(a, 0.0, 1.0, Eigen::Vector2d(6.0, 0.0));
   const auto kps = GridKeypoints();
   // Windows of +-2 px centred 3 px off the truth: the truth is outside every one of them.
   const auto preds = Predictions(w, kps, {3.0, 0.0}, 2.0f);
@@ -222,10 +195,10 @@ TEST(KltTrackerTest, TheWindowGatesTracks) {
 }
 
 TEST(KltTrackerTest, LargeMotionNeedsTheSeed) {
-  const cv::Mat a = Texture(6);
+  const cv::Mat a = SmoothTexture(6);
   // 70 px: beyond the reach of an unseeded 3-level pyramid with a 21 x 21 window on this
   // texture, trivial from a seed 2 px off.
-  const Warped w = Warp(a, 0.0, Eigen::Vector2d(70.0, 0.0));
+  const WarpedImage w = WarpSimilarity(a, 0.0, 1.0, Eigen::Vector2d(70.0, 0.0));
   std::vector<cv::KeyPoint> kps;
   for (int y = 70; y <= 170; y += 20) {
     for (int x = 30; x <= 150; x += 20) kps.emplace_back(cv::Point2f(x, y), 7.0f);
@@ -242,8 +215,8 @@ TEST(KltTrackerTest, LargeMotionNeedsTheSeed) {
 }
 
 TEST(KltTrackerTest, UnseededTrackerFollowsSmallMotion) {
-  const cv::Mat a = Texture(7);
-  const Warped w = Warp(a, 0.0, Eigen::Vector2d(4.5, -3.2));
+  const cv::Mat a = SmoothTexture(7);
+  const WarpedImage w = WarpSimilarity(a, 0.0, 1.0, Eigen::Vector2d(4.5, -3.2));
   const auto kps = GridKeypoints();
   const TrackResult r = TrackOpenCvLk(a, w.b, kps, KltOptions());
   EXPECT_EQ(r.stats.OutcomeSum(), static_cast<int>(kps.size()));
@@ -252,7 +225,7 @@ TEST(KltTrackerTest, UnseededTrackerFollowsSmallMotion) {
 }
 
 TEST(KltTrackerTest, NoPredictionAndBadInput) {
-  const cv::Mat a = Texture(8);
+  const cv::Mat a = SmoothTexture(8);
   const auto kps = GridKeypoints();
   const auto pa = TrackingPyramid::Build(a, 2);
   std::vector<KeypointPrediction> none(kps.size());  // kInvalid

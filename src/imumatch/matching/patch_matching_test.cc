@@ -24,14 +24,14 @@ cv::Mat Noise(uint64_t seed) {
 }
 
 // Frame B: A turned by angle_deg about (160, 120) and shifted; Map() is the truth.
-struct Scene {
+struct PatchScene {
   cv::Mat a, b;
   Eigen::Matrix2f rot;
   Eigen::Vector2f t;
   Eigen::Vector2f Map(const Eigen::Vector2f& p) const { return rot * p + t; }
 };
-Scene MakeScene(double angle_deg, const Eigen::Vector2f& shift) {
-  Scene s;
+PatchScene MakePatchScene(double angle_deg, const Eigen::Vector2f& shift) {
+  PatchScene s;
   s.a = Noise(7);
   const float th = static_cast<float>(angle_deg * M_PI / 180.0);
   s.rot << std::cos(th), -std::sin(th), std::sin(th), std::cos(th);
@@ -55,7 +55,7 @@ struct Problem {
   GridIndex grid;
   MatchResult result;
 };
-Problem MakeProblem(const Scene& s) {
+Problem MakeProblem(const PatchScene& s) {
   Problem p;
   for (int y = 40; y <= 200; y += 40) {
     for (int x = 40; x <= 260; x += 44) {
@@ -96,7 +96,7 @@ PinholeCamera SceneCamera() {
   return c;
 }
 
-PatchMatchingStats MatchAll(Problem& p, const Scene& s,
+PatchMatchingStats MatchAll(Problem& p, const PatchScene& s,
                             const PatchMatchingOptions& options = PatchMatchingOptions()) {
   return MatchByPatch(p.predictions, p.ideal_a, p.kps_a, DescriptorView::FromMat(p.desc_a),
                       p.ideal_b, p.grid, p.kps_b, DescriptorView::FromMat(p.desc_b), s.a, s.b,
@@ -104,7 +104,7 @@ PatchMatchingStats MatchAll(Problem& p, const Scene& s,
 }
 
 TEST(PatchMatchingTest, MatchesEachRejectedQueryToItsTruePartnerNotTheDecoy) {
-  const Scene s = MakeScene(3.0, Eigen::Vector2f(2.4f, -1.3f));
+  const PatchScene s = MakePatchScene(3.0, Eigen::Vector2f(2.4f, -1.3f));
   Problem p = MakeProblem(s);
   const int n = static_cast<int>(p.kps_a.size());
   const PatchMatchingStats st = MatchAll(p, s);
@@ -125,7 +125,7 @@ TEST(PatchMatchingTest, MatchesEachRejectedQueryToItsTruePartnerNotTheDecoy) {
 }
 
 TEST(PatchMatchingTest, TwoPlacesShowingThePatchMatchNeither) {
-  Scene s = MakeScene(0.0, Eigen::Vector2f(1.6f, 0.7f));
+  PatchScene s = MakePatchScene(0.0, Eigen::Vector2f(1.6f, 0.7f));
   Problem p = MakeProblem(s);
   // Query 0's decoy moved to 9 px (inside a wider window), and B's neighbourhood of its partner
   // copied there: B shows the patch twice, 9 px apart, both copies intact.
@@ -147,7 +147,7 @@ TEST(PatchMatchingTest, TwoPlacesShowingThePatchMatchNeither) {
 }
 
 TEST(PatchMatchingTest, AnUnrelatedFrameGivesNoMatch) {
-  Scene s = MakeScene(0.0, Eigen::Vector2f(1.0f, 1.0f));
+  PatchScene s = MakePatchScene(0.0, Eigen::Vector2f(1.0f, 1.0f));
   s.b = Noise(99);
   Problem p = MakeProblem(s);
   const PatchMatchingStats st = MatchAll(p, s);
@@ -157,7 +157,7 @@ TEST(PatchMatchingTest, AnUnrelatedFrameGivesNoMatch) {
 }
 
 TEST(PatchMatchingTest, FirstLookMatchesKeepTheirQueriesAndKeypoints) {
-  const Scene s = MakeScene(2.0, Eigen::Vector2f(-1.2f, 2.2f));
+  const PatchScene s = MakePatchScene(2.0, Eigen::Vector2f(-1.2f, 2.2f));
   Problem p = MakeProblem(s);
   // The first look matched query 0 to keypoint 2 (query 1's partner: a first look may err).
   // That match stands, and query 1 may not take keypoint 2 again.
@@ -182,7 +182,7 @@ TEST(PatchMatchingTest, FirstLookMatchesKeepTheirQueriesAndKeypoints) {
 }
 
 TEST(PatchMatchingTest, TheDescriptorThresholdGuardsWhenAskedTo) {
-  const Scene s = MakeScene(1.0, Eigen::Vector2f(0.5f, 0.5f));
+  const PatchScene s = MakePatchScene(1.0, Eigen::Vector2f(0.5f, 0.5f));
   Problem p = MakeProblem(s);
   p.desc_b.setTo(255);  // every candidate 256 bits away: beyond the Hamming threshold
   EXPECT_EQ(MatchAll(p, s).matched, static_cast<int>(p.kps_a.size()));  // the patch decides
@@ -195,11 +195,11 @@ TEST(PatchMatchingTest, TheDescriptorThresholdGuardsWhenAskedTo) {
 
 // The library's per-frame loop: GuidedMatcherWorkspace::Match, then the second look taking the
 // workspace. A camera rolls 20 deg about its optical axis (principal point at the image centre,
-// no lens distortion): frame B is frame A turned about the principal point, so Scene::Map is the
-// exact motion of every pixel. B also carries sensor noise, which moves ORB's descriptors more
+// no lens distortion): frame B is frame A turned about the principal point, so PatchScene::Map is
+// the exact motion of every pixel. B also carries sensor noise, which moves ORB's descriptors more
 // than the patches' correlation. Every match the look adds is judged against Map.
 TEST(PatchMatchingTest, AfterTheWorkspacesMatchItAddsTrueMatches) {
-  Scene s = MakeScene(20.0, Eigen::Vector2f::Zero());
+  PatchScene s = MakePatchScene(20.0, Eigen::Vector2f::Zero());
   cv::Mat noise(s.b.size(), CV_16S);
   cv::RNG rng(11);
   rng.fill(noise, cv::RNG::NORMAL, 0.0, 6.0);
@@ -256,7 +256,7 @@ TEST(PatchMatchingTest, AfterTheWorkspacesMatchItAddsTrueMatches) {
 }
 
 TEST(PatchMatchingTest, RejectsBadInput) {
-  const Scene s = MakeScene(0.0, Eigen::Vector2f(1.0f, 1.0f));
+  const PatchScene s = MakePatchScene(0.0, Eigen::Vector2f(1.0f, 1.0f));
   Problem p = MakeProblem(s);
   p.predictions.pop_back();
   EXPECT_THROW(MatchAll(p, s), InvalidArgument);

@@ -7,41 +7,15 @@
 #include <opencv2/imgproc.hpp>
 
 #include "imumatch/core/error.h"
+#include "imumatch/matching/matching_test_util.h"
 
 namespace imumatch {
 namespace {
 
-// A smooth random texture (blurred noise), 8-bit.
-cv::Mat Texture(int seed) {
-  cv::Mat noise(240, 320, CV_32F);
-  cv::RNG rng(static_cast<uint64_t>(seed));
-  rng.fill(noise, cv::RNG::NORMAL, 0.0, 1.0);
-  cv::GaussianBlur(noise, noise, cv::Size(0, 0), 2.0);
-  cv::normalize(noise, noise, 20, 235, cv::NORM_MINMAX);
-  cv::Mat out;
-  noise.convertTo(out, CV_8U);
-  return out;
-}
-
-// B = A moved by the similarity p_b = centre + s R(angle) (p_a - centre) + shift (cv::warpAffine
-// with the inverse map, bilinear): the truth for every point of A.
-struct Warped {
-  cv::Mat b;
-  Eigen::Matrix2d a;
-  Eigen::Vector2d t;
-  Eigen::Vector2d Map(const Eigen::Vector2d& p) const { return a * p + t; }
-};
-Warped Warp(const cv::Mat& img, double angle_deg, double scale, const Eigen::Vector2d& shift) {
-  const double th = angle_deg * M_PI / 180.0;
-  Warped w;
-  w.a << scale * std::cos(th), -scale * std::sin(th), scale * std::sin(th), scale * std::cos(th);
-  const Eigen::Vector2d centre(160.0, 120.0);
-  w.t = centre - w.a * centre + shift;
-  cv::Mat m =
-      (cv::Mat_<double>(2, 3) << w.a(0, 0), w.a(0, 1), w.t.x(), w.a(1, 0), w.a(1, 1), w.t.y());
-  cv::warpAffine(img, w.b, m, img.size(), cv::INTER_CUBIC, cv::BORDER_REFLECT);
-  return w;
-}
+// Textures and similarity warps with their exact point maps (matching_test_util.h).
+using testing::SmoothTexture;
+using testing::WarpedImage;
+using testing::WarpSimilarity;
 
 struct MatchSet {
   std::vector<cv::KeyPoint> kps_a, kps_b;
@@ -50,7 +24,7 @@ struct MatchSet {
 };
 // Keypoints of A on whole pixels; their partners in B rounded to whole pixels (a detector's
 // grid), up to 0.7 px from the truth.
-MatchSet MakeMatches(const Warped& w) {
+MatchSet MakeMatches(const WarpedImage& w) {
   MatchSet s;
   for (int y = 50; y <= 190; y += 20) {
     for (int x = 50; x <= 270; x += 20) {
@@ -87,8 +61,8 @@ double MeanError(const MatchSet& s, int* refined) {
 }
 
 TEST(SubpixelRefinement, RecoversASubPixelShift) {
-  const cv::Mat a = Texture(7);
-  const Warped w = Warp(a, 0.0, 1.0, Eigen::Vector2d(3.37, -1.62));
+  const cv::Mat a = SmoothTexture(7);
+  const WarpedImage w = WarpSimilarity(a, 0.0, 1.0, Eigen::Vector2d(3.37, -1.62));
   MatchSet s = MakeMatches(w);
   double before = 0.0;
   for (size_t i = 0; i < s.truth.size(); ++i) {
@@ -108,8 +82,8 @@ TEST(SubpixelRefinement, RecoversASubPixelShift) {
 TEST(SubpixelRefinement, ThePredictedRotationMakesARolledPatchRefinable) {
   // 25 degrees of roll between the frames: an unwarped 11x11 patch no longer fits, the patch
   // warped by the prediction's local affine map does.
-  const cv::Mat a = Texture(11);
-  const Warped w = Warp(a, 25.0, 1.0, Eigen::Vector2d(0.4, 0.2));
+  const cv::Mat a = SmoothTexture(11);
+  const WarpedImage w = WarpSimilarity(a, 25.0, 1.0, Eigen::Vector2d(0.4, 0.2));
   MatchSet with = MakeMatches(w), without = MakeMatches(w);
   std::vector<KeypointPrediction> predictions(with.kps_a.size());
   for (KeypointPrediction& p : predictions) {
@@ -131,8 +105,8 @@ TEST(SubpixelRefinement, ThePredictedRotationMakesARolledPatchRefinable) {
 }
 
 TEST(SubpixelRefinement, ExposureChangeCancels) {
-  const cv::Mat a = Texture(3);
-  Warped w = Warp(a, 0.0, 1.0, Eigen::Vector2d(-2.25, 0.8));
+  const cv::Mat a = SmoothTexture(3);
+  WarpedImage w = WarpSimilarity(a, 0.0, 1.0, Eigen::Vector2d(-2.25, 0.8));
   w.b.convertTo(w.b, CV_8U, 0.6, 10.0);  // gain 0.6, bias 10
   MatchSet s = MakeMatches(w);
   RefineMatches(a, w.b, s.kps_a, s.kps_b, {}, Camera(), SubpixelOptions(), s.matches);
@@ -145,9 +119,9 @@ TEST(SubpixelRefinement, APatchWithoutTextureIsRetriedLarger) {
   // The keypoint sits in a flat disc of radius 6.5 px inside a textured scene (the smooth centre
   // of a blob): the 9 x 9 patch sees no texture at all, the 17 x 17 one reaches the texture
   // around the disc and aligns.
-  cv::Mat a = Texture(5);
+  cv::Mat a = SmoothTexture(5);
   cv::circle(a, cv::Point(160, 120), 6, cv::Scalar(128), cv::FILLED);
-  const Warped w = Warp(a, 0.0, 1.0, Eigen::Vector2d(1.3, -0.6));
+  const WarpedImage w = WarpSimilarity(a, 0.0, 1.0, Eigen::Vector2d(1.3, -0.6));
   std::vector<cv::KeyPoint> kps_a = {cv::KeyPoint(cv::Point2f(160, 120), 20.0f)};
   std::vector<cv::KeyPoint> kps_b = {cv::KeyPoint(cv::Point2f(161, 119), 20.0f)};
   std::vector<Match> matches(1);
@@ -169,8 +143,8 @@ TEST(SubpixelRefinement, ADriftingPatchIsRetriedLargerAndMustCorrelate) {
   // B's keypoints at A's positions, 3.5 px from their true partners (B = A moved by (3, -1.8)):
   // from that far some 9 x 9 patches slide off (4 of the 96 with this texture); the 17 x 17 patch
   // aligns them on the truth.
-  const cv::Mat a = Texture(2);
-  const Warped w = Warp(a, 0.0, 1.0, Eigen::Vector2d(3.0, -1.8));
+  const cv::Mat a = SmoothTexture(2);
+  const WarpedImage w = WarpSimilarity(a, 0.0, 1.0, Eigen::Vector2d(3.0, -1.8));
   MatchSet with = MakeMatches(w);
   for (size_t i = 0; i < with.kps_b.size(); ++i) with.kps_b[i].pt = with.kps_a[i].pt;
   MatchSet without = with;
