@@ -14,13 +14,14 @@
 
 namespace imumatch::testing {
 
-// A 320 x 240 8-bit texture: Gaussian noise blurred with sigma 2 px, stretched to [20, 235].
-inline cv::Mat SmoothTexture(int seed) {
+// A 320 x 240 8-bit texture without repetition: Gaussian noise blurred with sigma_px, stretched
+// to [lo, hi].
+inline cv::Mat SmoothTexture(int seed, double sigma_px = 2.0, double lo = 20.0, double hi = 235.0) {
   cv::Mat noise(240, 320, CV_32F);
   cv::RNG rng(static_cast<uint64_t>(seed));
   rng.fill(noise, cv::RNG::NORMAL, 0.0, 1.0);
-  cv::GaussianBlur(noise, noise, cv::Size(0, 0), 2.0);
-  cv::normalize(noise, noise, 20, 235, cv::NORM_MINMAX);
+  cv::GaussianBlur(noise, noise, cv::Size(0, 0), sigma_px);
+  cv::normalize(noise, noise, lo, hi, cv::NORM_MINMAX);
   cv::Mat out;
   noise.convertTo(out, CV_8U);
   return out;

@@ -7,21 +7,13 @@
 #include <opencv2/imgproc.hpp>
 
 #include "imumatch/core/error.h"
+#include "imumatch/matching/matching_test_util.h"
 
 namespace imumatch {
 namespace {
 
 // Blurred Gaussian noise, 8-bit: texture everywhere, no repetition.
-cv::Mat Noise(uint64_t seed) {
-  cv::Mat f(240, 320, CV_32F);
-  cv::RNG rng(seed);
-  rng.fill(f, cv::RNG::NORMAL, 0.0, 1.0);
-  cv::GaussianBlur(f, f, cv::Size(0, 0), 1.8);
-  cv::normalize(f, f, 15, 240, cv::NORM_MINMAX);
-  cv::Mat out;
-  f.convertTo(out, CV_8U);
-  return out;
-}
+cv::Mat Noise(int seed) { return testing::SmoothTexture(seed, 1.8, 15.0, 240.0); }
 
 // Frame B: A turned by angle_deg about (160, 120) and shifted; Map() is the truth.
 struct PatchScene {
@@ -33,13 +25,10 @@ struct PatchScene {
 PatchScene MakePatchScene(double angle_deg, const Eigen::Vector2f& shift) {
   PatchScene s;
   s.a = Noise(7);
-  const float th = static_cast<float>(angle_deg * M_PI / 180.0);
-  s.rot << std::cos(th), -std::sin(th), std::sin(th), std::cos(th);
-  const Eigen::Vector2f centre(160.0f, 120.0f);
-  s.t = centre - s.rot * centre + shift;
-  const cv::Mat m = (cv::Mat_<double>(2, 3) << s.rot(0, 0), s.rot(0, 1), s.t.x(), s.rot(1, 0),
-                     s.rot(1, 1), s.t.y());
-  cv::warpAffine(s.a, s.b, m, s.a.size(), cv::INTER_CUBIC, cv::BORDER_REFLECT);
+  const testing::WarpedImage w = testing::WarpSimilarity(s.a, angle_deg, 1.0, shift.cast<double>());
+  s.b = w.b;
+  s.rot = w.a.cast<float>();
+  s.t = w.t.cast<float>();
   return s;
 }
 
