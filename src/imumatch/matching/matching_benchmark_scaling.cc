@@ -1,10 +1,12 @@
 // matching_benchmark, part 2: how the guided cost grows with the keypoint count. A stream of
-// different pairs (BM_GuidedStreamOfPairs), the parts of the per-frame work (prediction, window
+// different pairs (BM_GuidedStreamOfPairs), both sizes in alternating blocks
+// (BM_GuidedLinearityPaired), the parts of the per-frame work (prediction, window
 // search), and the window search on a synthetic image whose area grows with n (constant density:
 // the same candidates per window). The summary (matching_benchmark.cc) prints the ratios.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <map>
 #include <random>
@@ -196,7 +198,67 @@ void BM_GuidedSearchOnly(benchmark::State& state) {
   state.counters["dist/q"] = static_cast<double>(stats.distances_computed) / queries;
 }
 
+// The linear-cost ratio measured in pairs: every iteration runs a block of frames at 1000 ORB
+// keypoints, then a block at 8000 (about 20 ms each), so that the machine's slow spells, which
+// last seconds to minutes here, fall on both sizes alike instead of on whichever benchmark ran
+// during them. Each block starts with one frame that is not timed: the one before a stream's
+// first timed frame, so that the block measures what a stream of that size costs, with its own
+// buffers and data warm as they would be (alternating single frames instead would run every
+// 1000-keypoint frame with caches just emptied by an 8000-keypoint one: 1.00-1.08x, a measure of
+// cold caches, not of the search). Arg stream: 0 = the TUM pair in every frame (BM_Guided's
+// measure), 1 = the kStreamVariants pairs in turn (BM_GuidedStreamOfPairs'). Counters: ns per
+// keypoint of A at each size in the fastest iteration, ratio_best = their ratio, and
+// ratio_median = the median over iterations of each iteration's 8000 / 1000 ratio.
+void BM_GuidedLinearityPaired(benchmark::State& state) {
+  using Clock = std::chrono::steady_clock;
+  const bool stream = state.range(0) != 0;
+  constexpr int kSizes[2] = {1000, 8000};
+  constexpr int kFrames[2] = {8 * kStreamVariants, kStreamVariants};  // about 20 ms each
+  double keypoints_per_frame[2] = {0.0, 0.0};  // mean over the variants a block runs
+  for (int k = 0; k < 2; ++k) {
+    for (int v = 0; v < kStreamVariants; ++v) {
+      keypoints_per_frame[k] +=
+          static_cast<double>(GetFeatures(0, kSizes[k], stream ? v : -1).kps_a.size()) /
+          kStreamVariants;
+    }
+  }
+  GuidedMatcherWorkspace workspace[2];
+  const PinholeCamera camera = BenchCamera();
+  const auto run = [&](int k, int v) {
+    const FeatureSet& s = GetFeatures(0, kSizes[k], stream ? v : -1);
+    const CameraMotion& motion = stream ? GetPairVariant(v).motion : GetFrames().motion;
+    const cv::Mat& depth = stream ? GetPairVariant(v).depth_a : GetFrames().depth_a;
+    MatchResult r = workspace[k].Match(camera, motion, s.kps_a, s.desc_a, depth, s.kps_b, s.desc_b,
+                                       PredictionOptions(), GuidedMatcherOptions());
+    benchmark::DoNotOptimize(r.matches.data());
+  };
+  std::vector<double> ratios;
+  double best[2] = {1e300, 1e300};
+  for (auto _ : state) {
+    double ns_per_kp[2];
+    for (int k = 0; k < 2; ++k) {
+      run(k, kStreamVariants - 1);  // not timed: the frame before the block's first
+      const auto t0 = Clock::now();
+      for (int f = 0; f < kFrames[k]; ++f) run(k, f % kStreamVariants);
+      const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+      ns_per_kp[k] = 1e9 * seconds / (kFrames[k] * keypoints_per_frame[k]);
+      best[k] = std::min(best[k], ns_per_kp[k]);
+    }
+    ratios.push_back(ns_per_kp[1] / ns_per_kp[0]);
+  }
+  std::sort(ratios.begin(), ratios.end());
+  state.counters["ns/kp_1000"] = best[0];
+  state.counters["ns/kp_8000"] = best[1];
+  state.counters["ratio_median"] = ratios.empty() ? 0.0 : ratios[ratios.size() / 2];
+  state.counters["ratio_best"] = best[1] / best[0];
+}
+
 BENCHMARK(BM_GuidedStreamOfPairs)->Apply(OrbSizes)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_GuidedLinearityPaired)
+    ->ArgName("stream")
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_GuidedPredictOnly)->Apply(OrbSizes)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_GuidedSearchOnly)->Apply(OrbSizes)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_GuidedSearchConstantDensity)
