@@ -221,9 +221,9 @@ class CapturingReporter : public benchmark::ConsoleReporter {
       if (!cpu_us.count(name) || cpu < cpu_us[name]) cpu_us[name] = cpu;
       if (r.counters.count("kps_a")) kps[name] = r.counters.at("kps_a").value;
       if (r.counters.count("ratio_median")) {
-        paired[name].push_back(
-            {r.counters.at("ratio_median").value, r.counters.at("ratio_best").value,
-             r.counters.at("ns/kp_1000").value, r.counters.at("ns/kp_8000").value});
+        paired[name].push_back({r.counters.at("ratio_median").value,
+                                r.counters.at("ns/kp_1000").value,
+                                r.counters.at("ns/kp_8000").value});
       }
     }
     ConsoleReporter::ReportRuns(runs);
@@ -231,8 +231,8 @@ class CapturingReporter : public benchmark::ConsoleReporter {
   std::map<std::string, double> times_us;
   std::map<std::string, double> cpu_us;
   std::map<std::string, double> kps;
-  // BM_GuidedLinearityPaired, per repetition: ratio_median, ratio_best, ns/kp at 1000 and 8000.
-  std::map<std::string, std::vector<std::array<double, 4>>> paired;
+  // BM_GuidedLinearityPaired, per repetition: its median iteration's ratio, ns/kp at 1000, 8000.
+  std::map<std::string, std::vector<std::array<double, 3>>> paired;
 };
 
 // The median over repetitions of BM_GuidedLinearityPaired's per-iteration median ratio (-1: not
@@ -245,8 +245,8 @@ std::pair<double, std::string> PairedRatio(const CapturingReporter& rep, int str
   for (const auto& v : it->second) {
     r.push_back(v[0]);
     char buf[64];
-    std::snprintf(buf, sizeof buf, "%s%.2f (%.0f / %.0f ns)", text.empty() ? "" : ", ", v[0], v[3],
-                  v[2]);
+    std::snprintf(buf, sizeof buf, "%s%.2f (%.0f / %.0f ns)", text.empty() ? "" : ", ", v[0], v[2],
+                  v[1]);
     text += buf;
   }
   std::sort(r.begin(), r.end());
