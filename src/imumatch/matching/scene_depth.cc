@@ -10,29 +10,19 @@
 
 namespace imumatch {
 
-SceneNearDepth PredictKeypointsInScene(
-    const KeypointPredictor& predictor, const std::vector<KeypointInfo>& keypoints_a,
-    const std::vector<float>& depths_m, const DescriptorView& descriptors_a,
-    const std::vector<KeypointInfo>& keypoints_b, const GridIndex& grid_b,
-    const DescriptorView& descriptors_b, const GuidedMatcherOptions& matcher_options,
-    std::vector<KeypointPrediction>* predictions, GuidedSearchScratch* scratch) {
-  IMUMATCH_CHECK(predictions != nullptr && scratch != nullptr,
-                 "PredictKeypointsInScene needs predictions and a scratch");
-  PrepareGuidedCandidates(keypoints_b, grid_b, descriptors_b, &scratch->candidates);
-  return PredictKeypointsInScene(predictor, keypoints_a, depths_m, descriptors_a, keypoints_b,
-                                 scratch->candidates, matcher_options, predictions, scratch);
-}
+namespace {
 
-SceneNearDepth PredictKeypointsInScene(
+// The work of both overloads. candidates_b() gives frame B prepared for the search; it is called
+// only when the pilot runs, so that a caller who did not prepare B pays for it only then.
+template <typename GetCandidates>
+SceneNearDepth PredictInScene(
     const KeypointPredictor& predictor, const std::vector<KeypointInfo>& keypoints_a,
     const std::vector<float>& depths_m, const DescriptorView& descriptors_a,
-    const std::vector<KeypointInfo>& keypoints_b, const GuidedCandidates& candidates_b,
+    const std::vector<KeypointInfo>& keypoints_b, const GetCandidates& candidates_b,
     const GuidedMatcherOptions& matcher_options, std::vector<KeypointPrediction>* predictions,
     GuidedSearchScratch* scratch) {
   IMUMATCH_CHECK(predictions != nullptr && scratch != nullptr,
                  "PredictKeypointsInScene needs predictions and a scratch");
-  IMUMATCH_CHECK(static_cast<int>(keypoints_b.size()) == candidates_b.count(),
-                 keypoints_b.size() << " keypoints in B, " << candidates_b.count() << " prepared");
   const PredictionOptions& po = predictor.options();
   const SceneNearDepthOptions& so = po.scene_near;
   so.Check();
@@ -75,7 +65,7 @@ SceneNearDepth PredictKeypointsInScene(
   GuidedMatcherOptions pilot_options = matcher_options;
   pilot_options.ratio = std::min(pilot_options.ratio, so.pilot_ratio);
   const MatchResult pilot_result =
-      MatchGuided(*predictions, keypoints_a, descriptors_a, candidates_b, pilot_options, scratch);
+      MatchGuided(*predictions, keypoints_a, descriptors_a, candidates_b(), pilot_options, scratch);
 
   // Each match's sample: the nearer of (a) the deepest near end on the ladder whose no-depth
   // capsule contains the partner (the capsules shrink as the near end moves away: a binary
@@ -139,6 +129,36 @@ SceneNearDepth PredictKeypointsInScene(
     PredictKeypoints(predictor, keypoints_a, depths_m, predictions);
   }
   return out;
+}
+
+}  // namespace
+
+SceneNearDepth PredictKeypointsInScene(
+    const KeypointPredictor& predictor, const std::vector<KeypointInfo>& keypoints_a,
+    const std::vector<float>& depths_m, const DescriptorView& descriptors_a,
+    const std::vector<KeypointInfo>& keypoints_b, const GridIndex& grid_b,
+    const DescriptorView& descriptors_b, const GuidedMatcherOptions& matcher_options,
+    std::vector<KeypointPrediction>* predictions, GuidedSearchScratch* scratch) {
+  IMUMATCH_CHECK(scratch != nullptr, "PredictKeypointsInScene needs predictions and a scratch");
+  const auto prepare = [&]() -> const GuidedCandidates& {
+    PrepareGuidedCandidates(keypoints_b, grid_b, descriptors_b, &scratch->candidates);
+    return scratch->candidates;
+  };
+  return PredictInScene(predictor, keypoints_a, depths_m, descriptors_a, keypoints_b, prepare,
+                        matcher_options, predictions, scratch);
+}
+
+SceneNearDepth PredictKeypointsInScene(
+    const KeypointPredictor& predictor, const std::vector<KeypointInfo>& keypoints_a,
+    const std::vector<float>& depths_m, const DescriptorView& descriptors_a,
+    const std::vector<KeypointInfo>& keypoints_b, const GuidedCandidates& candidates_b,
+    const GuidedMatcherOptions& matcher_options, std::vector<KeypointPrediction>* predictions,
+    GuidedSearchScratch* scratch) {
+  IMUMATCH_CHECK(static_cast<int>(keypoints_b.size()) == candidates_b.count(),
+                 keypoints_b.size() << " keypoints in B, " << candidates_b.count() << " prepared");
+  const auto prepared = [&]() -> const GuidedCandidates& { return candidates_b; };
+  return PredictInScene(predictor, keypoints_a, depths_m, descriptors_a, keypoints_b, prepared,
+                        matcher_options, predictions, scratch);
 }
 
 }  // namespace imumatch
