@@ -3,7 +3,6 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
-#include <numeric>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -11,6 +10,7 @@
 #include "imumatch/core/error.h"
 #include "imumatch/core/so3.h"
 #include "imumatch/matching/guided_matcher.h"
+#include "imumatch/matching/matching_test_util.h"
 #include "imumatch/matching/predictor.h"
 #include "imumatch/matching/scene_depth.h"
 
@@ -75,63 +75,13 @@ TEST(GuidedCandidatesTest, HoldsBInTheGridsSlotOrder) {
   EXPECT_EQ(c.grid, &grid2);
 }
 
-// A camera translating past random points with known depths; B holds every point's partner
+// n points 0.8-4 m away seen by a camera that turns and moves; B holds every point's partner
 // (descriptor with 2 bits flipped) plus as many random distractors, shuffled.
-struct PreparedScene {
-  PinholeCamera camera = PinholeCamera::KinectDefault();
-  CameraMotion motion;
-  std::vector<KeypointInfo> kps_a, kps_b;
-  std::vector<float> depth_a;
-  cv::Mat desc_a, desc_b;
-  std::vector<int> partner;
-};
-
-PreparedScene MakePreparedScene(int n, uint32_t seed) {
-  PreparedScene s;
-  s.motion.cam_b_from_cam_a =
-      Rigid3d(FromEulerZYX(0.02, -0.01, 0.03), Eigen::Vector3d(0.06, -0.02, 0.04));
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> uu(0, 639), uv(0, 479), uz(1.0, 5.0);
-  std::uniform_int_distribution<int> byte(0, 255), bit(0, 255);
-  std::vector<KeypointInfo> b;
-  std::vector<std::vector<uint8_t>> rows_a, rows_b;
-  while (static_cast<int>(s.kps_a.size()) < n) {
-    const Eigen::Vector2d pa(uu(rng), uv(rng));
-    const double z = uz(rng);
-    const auto pb = s.camera.Project(s.motion.cam_b_from_cam_a * s.camera.Unproject(pa, z));
-    if (!pb || !s.camera.IsInside(*pb, 1.0)) continue;
-    s.kps_a.push_back({static_cast<float>(pa.x()), static_cast<float>(pa.y()), -1, 0, 0});
-    b.push_back({static_cast<float>(pb->x()), static_cast<float>(pb->y()), -1, 0, 0});
-    s.depth_a.push_back(static_cast<float>(z));
-    std::vector<uint8_t> da(32);
-    for (auto& v : da) v = static_cast<uint8_t>(byte(rng));
-    std::vector<uint8_t> db = da;
-    for (int f = 0; f < 2; ++f) {
-      const int k = bit(rng);
-      db[k / 8] ^= static_cast<uint8_t>(1u << (k % 8));
-    }
-    rows_a.push_back(da);
-    rows_b.push_back(db);
-  }
-  for (int k = 0; k < n; ++k) {
-    b.push_back({static_cast<float>(uu(rng)), static_cast<float>(uv(rng)), -1, 0, 0});
-    std::vector<uint8_t> d(32);
-    for (auto& v : d) v = static_cast<uint8_t>(byte(rng));
-    rows_b.push_back(d);
-  }
-  std::vector<int> perm(b.size());
-  std::iota(perm.begin(), perm.end(), 0);
-  std::shuffle(perm.begin(), perm.end(), rng);
-  s.partner.assign(n, -1);
-  s.desc_a.create(n, 32, CV_8U);
-  s.desc_b.create(static_cast<int>(b.size()), 32, CV_8U);
-  for (int i = 0; i < n; ++i) std::memcpy(s.desc_a.ptr(i), rows_a[i].data(), 32);
-  for (size_t k = 0; k < perm.size(); ++k) {
-    s.kps_b.push_back(b[perm[k]]);
-    std::memcpy(s.desc_b.ptr(static_cast<int>(k)), rows_b[perm[k]].data(), 32);
-    if (perm[k] < n) s.partner[perm[k]] = static_cast<int>(k);
-  }
-  return s;
+testing::SyntheticPair MakePreparedScene(int n, uint32_t seed) {
+  const Rigid3d motion(FromEulerZYX(0.02, -0.01, 0.03), Eigen::Vector3d(0.06, -0.02, 0.04));
+  CameraMotion given;
+  given.cam_b_from_cam_a = motion;
+  return testing::MakePair(n, n, motion, given, seed, 2);
 }
 
 void ExpectSameSearch(const MatchResult& a, const MatchResult& b) {
@@ -146,7 +96,7 @@ void ExpectSameSearch(const MatchResult& a, const MatchResult& b) {
 }
 
 TEST(GuidedCandidatesTest, OnePreparationServesThePilotAndEverySearch) {
-  const PreparedScene s = MakePreparedScene(400, 11);
+  const testing::SyntheticPair s = MakePreparedScene(400, 11);
   const GuidedMatcherOptions mo;
   GridIndex grid;
   grid.Build(s.kps_b, s.camera.width, s.camera.height, static_cast<float>(mo.grid_cell_size));
@@ -178,7 +128,7 @@ TEST(GuidedCandidatesTest, OnePreparationServesThePilotAndEverySearch) {
   EXPECT_GE(near_prepared.pilot_matches, 90);
   EXPECT_EQ(near_prepared.pilot_matches, near_keypoints.pilot_matches);
   EXPECT_EQ(near_prepared.segment_min_depth_m, near_keypoints.segment_min_depth_m);
-  // The points lie 1-5 m away: the segments start beyond the configured 0.1 m, short of 1 m.
+  // The points lie 0.8-4 m away: the segments start beyond the configured 0.1 m, short of 1 m.
   EXPECT_TRUE(near_prepared.moved);
   EXPECT_GT(near_prepared.segment_min_depth_m, 0.2);
   EXPECT_LT(near_prepared.segment_min_depth_m, 1.0);
@@ -196,7 +146,7 @@ TEST(GuidedCandidatesTest, OnePreparationServesThePilotAndEverySearch) {
 }
 
 TEST(GuidedCandidatesTest, RefusesWhatDoesNotFit) {
-  const PreparedScene s = MakePreparedScene(30, 12);
+  const testing::SyntheticPair s = MakePreparedScene(30, 12);
   GridIndex grid;
   grid.Build(s.kps_b, s.camera.width, s.camera.height, 8.0f);
   GuidedCandidates c;

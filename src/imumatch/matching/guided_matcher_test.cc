@@ -10,83 +10,14 @@
 
 #include "imumatch/core/error.h"
 #include "imumatch/core/so3.h"
+#include "imumatch/matching/matching_test_util.h"
 
 namespace imumatch {
 namespace {
 
-// A synthetic pair: random 3D points in front of camera A, projected into A and B with a known
-// motion; binary descriptors random in A and copied to B with a few flipped bits; extra distractor
-// keypoints with random descriptors in B.
-struct SyntheticPair {
-  PinholeCamera camera;
-  CameraMotion motion;  // the motion given to the matcher
-  std::vector<KeypointInfo> kps_a, kps_b;
-  std::vector<float> depth_a;
-  cv::Mat desc_a, desc_b;
-  std::vector<int> partner;  // partner[i] = index in B of A's keypoint i
-};
-
-cv::Mat RandomDescriptor(std::mt19937& rng) {
-  cv::Mat d(1, 32, CV_8U);
-  std::uniform_int_distribution<int> byte(0, 255);
-  for (int k = 0; k < 32; ++k) d.at<uint8_t>(0, k) = static_cast<uint8_t>(byte(rng));
-  return d;
-}
-
-// true_motion moves the points; the returned pair carries `given` (nominal) as its motion.
-SyntheticPair MakePair(int n_points, int n_distractors, const Rigid3d& true_motion,
-                       const CameraMotion& given, uint32_t seed, int flipped_bits = 3) {
-  SyntheticPair s;
-  s.camera = PinholeCamera::KinectDefault();
-  s.motion = given;
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> uu(0, 639), uv(0, 479), uz(0.8, 4.0);
-  std::vector<cv::Mat> rows_a, rows_b;
-  while (static_cast<int>(s.kps_a.size()) < n_points) {
-    const Eigen::Vector2d pa(uu(rng), uv(rng));
-    const double z = uz(rng);
-    const Eigen::Vector3d p_b = true_motion * s.camera.Unproject(pa, z);
-    const auto pb = s.camera.Project(p_b);
-    if (!pb || !s.camera.IsInside(*pb, 1.0)) continue;
-    s.kps_a.push_back(
-        KeypointInfo{static_cast<float>(pa.x()), static_cast<float>(pa.y()), -1, 0, 0});
-    s.kps_b.push_back(
-        KeypointInfo{static_cast<float>(pb->x()), static_cast<float>(pb->y()), -1, 0, 0});
-    s.depth_a.push_back(static_cast<float>(z));
-    cv::Mat da = RandomDescriptor(rng), db = da.clone();
-    // Exactly flipped_bits distinct bits.
-    std::vector<int> bits(256);
-    for (int b = 0; b < 256; ++b) bits[b] = b;
-    std::shuffle(bits.begin(), bits.end(), rng);
-    for (int f = 0; f < flipped_bits; ++f) {
-      db.at<uint8_t>(0, bits[f] / 8) ^= static_cast<uint8_t>(1u << (bits[f] % 8));
-    }
-    rows_a.push_back(da);
-    rows_b.push_back(db);
-  }
-  for (int k = 0; k < n_distractors; ++k) {
-    s.kps_b.push_back(
-        KeypointInfo{static_cast<float>(uu(rng)), static_cast<float>(uv(rng)), -1, 0, 0});
-    rows_b.push_back(RandomDescriptor(rng));
-  }
-  // Shuffle B so partner indices are not the identity.
-  std::vector<int> perm(s.kps_b.size());
-  for (size_t k = 0; k < perm.size(); ++k) perm[k] = static_cast<int>(k);
-  std::shuffle(perm.begin(), perm.end(), rng);
-  std::vector<KeypointInfo> kb(perm.size());
-  std::vector<cv::Mat> rb(perm.size());
-  std::vector<int> new_pos(perm.size());
-  for (size_t k = 0; k < perm.size(); ++k) {
-    kb[k] = s.kps_b[perm[k]];
-    rb[k] = rows_b[perm[k]];
-    new_pos[perm[k]] = static_cast<int>(k);
-  }
-  s.kps_b = kb;
-  for (int i = 0; i < n_points; ++i) s.partner.push_back(new_pos[i]);
-  cv::vconcat(rows_a, s.desc_a);
-  cv::vconcat(rb, s.desc_b);
-  return s;
-}
+// Random points seen by two cameras, descriptors with flipped bits (matching_test_util.h).
+using testing::MakePair;
+using testing::SyntheticPair;
 
 CameraMotion Motion(const Rigid3d& r) {
   CameraMotion m;
