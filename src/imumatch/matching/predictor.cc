@@ -317,10 +317,35 @@ KeypointPrediction KeypointPredictor::Predict(const Eigen::Vector2d& uv_a, doubl
   }
 
   if (!options_.predict_without_depth) return p;  // kInvalid
-  // Inverse-depth interval of the swept segment, cut to the part in front of camera B:
-  // q_z(rho) = rx.z + rho t.z > kMinForwardDepth.
-  double rho_lo = 1.0 / options_.segment_max_depth;  // 0 for +inf
-  double rho_hi = 1.0 / options_.segment_min_depth;
+  return PredictAlongSegment(uv_a, rx, range_a, pixel_cov_a, pixel_var,
+                             1.0 / options_.segment_max_depth, 1.0 / options_.segment_min_depth);
+}
+
+KeypointPrediction KeypointPredictor::PredictInInverseDepthRange(const Eigen::Vector2d& uv_a,
+                                                                 double rho_far, double rho_near,
+                                                                 double sigma_scale) const {
+  if (!uv_a.allFinite() || !std::isfinite(sigma_scale)) return KeypointPrediction();
+  const Eigen::Vector2d xy = camera_.IdealToNormalized(uv_a);
+  const Eigen::Vector3d xa(xy.x(), xy.y(), 1.0);
+  const double sigma_px = options_.keypoint_sigma_px * sigma_scale;
+  const double pixel_var = sigma_px * sigma_px;
+  double lo = 1.0 / options_.segment_max_depth, hi = 1.0 / options_.segment_min_depth;
+  if (rho_far <= rho_near && rho_near >= lo && rho_far <= hi) {  // overlaps (not NaN)
+    lo = std::max(rho_far, lo);
+    hi = std::min(rho_near, hi);
+  }
+  return PredictAlongSegment(uv_a, r_ * xa, xa.norm(), PixelNoise(uv_a, pixel_var), pixel_var, lo,
+                             hi);
+}
+
+KeypointPrediction KeypointPredictor::PredictAlongSegment(const Eigen::Vector2d& uv_a,
+                                                          const Eigen::Vector3d& rx, double range_a,
+                                                          const Eigen::Matrix2d& pixel_cov_a,
+                                                          double pixel_var, double rho_lo,
+                                                          double rho_hi) const {
+  KeypointPrediction p;
+  // The inverse-depth interval [rho_lo, rho_hi] of the swept segment, cut to the part in front of
+  // camera B: q_z(rho) = rx.z + rho t.z > kMinForwardDepth.
   if (t_.z() > 0.0) {
     rho_lo = std::max(rho_lo, (kMinForwardDepth - rx.z()) / t_.z());
   } else if (t_.z() < 0.0) {

@@ -204,6 +204,13 @@ class KeypointPredictor {
   // sigma_scale multiplies options.keypoint_sigma_px.
   KeypointPrediction Predict(const Eigen::Vector2d& uv_a, double depth_m,
                              double sigma_scale = 1.0) const;
+  // A keypoint without depth searched along the part of its epipolar segment between the inverse
+  // depths rho_far <= rho_near (1/m; 0 is infinity) that lies within the configured segment
+  // [1 / segment_max_depth, 1 / segment_min_depth]: for a depth range the scene around the
+  // keypoint shows (NarrowSegmentsToNeighbours). A range outside the configured one (or NaN):
+  // the configured segment, as Predict without depth. Runs even when predict_without_depth is off.
+  KeypointPrediction PredictInInverseDepthRange(const Eigen::Vector2d& uv_a, double rho_far,
+                                                double rho_near, double sigma_scale = 1.0) const;
 
   // K R K^-1 applied to uv_a (ideal pixels in and out); NaN when the direction points behind
   // camera B.
@@ -229,6 +236,11 @@ class KeypointPredictor {
 
  private:
   void Init(const CameraMotion& motion);
+  // The prediction without depth along the inverse depths [rho_lo, rho_hi]; rx = R x_a, range_a =
+  // |x_a|, the keypoint noise of A as Predict computes them.
+  KeypointPrediction PredictAlongSegment(const Eigen::Vector2d& uv_a, const Eigen::Vector3d& rx,
+                                         double range_a, const Eigen::Matrix2d& pixel_cov_a,
+                                         double pixel_var, double rho_lo, double rho_hi) const;
   Eigen::Vector2d PinholeProject(const Eigen::Vector3d& q) const;
   // Isotropic image-pixel variance -> covariance in ideal pixels at the ideal position uv.
   Eigen::Matrix2d PixelNoise(const Eigen::Vector2d& uv, double pixel_variance) const;
