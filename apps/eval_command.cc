@@ -61,6 +61,7 @@ struct CommonArgs {
   bool single_pass = false;
   bool fixed_gyro_bias = false;
   bool no_patch_look = false;
+  bool no_neighbour_depth = false;
   double guided_ratio = -1.0;           // < 0: --ratio
   double orientation_tolerance = -1.0;  // < 0: GuidedMatcherOptions default
   double still_s = 1.0;
@@ -129,6 +130,9 @@ void AddCommonOptions(CLI::App* cmd, CommonArgs& a) {
                 "pairs' fitted rotations)");
   cmd->add_flag("--no-patch-look", a.no_patch_look,
                 "guided: no second look by the image patch at the queries left unmatched");
+  cmd->add_flag("--no-neighbour-depth", a.no_neighbour_depth,
+                "guided, second pass: search keypoints without depth along their whole segment, "
+                "not along the inverse depths their matched neighbours show");
   cmd->add_flag("--single-pass", a.single_pass,
                 "guided: match once with the IMU's windows (no second pass with the motion fitted "
                 "to the first pass's matches)");
@@ -182,6 +186,7 @@ EvaluationOptions MakeOptions(const CommonArgs& a) {
   o.second_pass = !a.single_pass;
   o.gyro_bias_from_matches = !a.fixed_gyro_bias;
   o.patch_second_look = !a.no_patch_look;
+  o.neighbour_depth.enabled = !a.no_neighbour_depth;
   if (a.orientation_tolerance >= 0.0) o.guided.orientation_tolerance_deg = a.orientation_tolerance;
   if (a.sigma_scaling == "none") {
     o.prediction.sigma_scaling = KeypointSigmaScaling::kNone;
@@ -216,6 +221,8 @@ void Finish(const EvaluationResult& result, ReportContext& context, const Common
                                                {"imu model", a.imu_model},
                                                {"seed", std::to_string(a.seed)}});
   context.config.push_back({"second look by the patch", o.patch_second_look ? "on" : "off"});
+  context.config.push_back(
+      {"segments from the neighbours' depths", o.neighbour_depth.enabled ? "on" : "off"});
   for (const std::string& w : result.warnings) std::cerr << "imumatch: warning: " << w << "\n";
   std::cout << MarkdownReport(result, context) << std::flush;
   const auto files = WriteEvaluationOutputs(a.out, result, context);

@@ -27,6 +27,7 @@ struct TrackArgs {
   int max_keypoints = 1000;
   bool hybrid = false;
   bool no_second_pass = false;
+  bool no_neighbour_depth = false;
   bool fixed_segments = false;
   double still_s = 0.5;
   size_t first = 0;
@@ -45,6 +46,7 @@ void RunTrackCommand(const TrackArgs& a) {
   o.front_end.features.max_keypoints = a.max_keypoints;
   o.front_end.hybrid = a.hybrid;
   o.front_end.second_pass = !a.no_second_pass;
+  o.front_end.neighbour_depth.enabled = !a.no_neighbour_depth;
   o.front_end.prediction.scene_near.enabled = !a.fixed_segments;
   o.front_end.still_s = a.still_s;
   o.first_frame = a.first;
@@ -116,6 +118,9 @@ void AddTrackCommand(CLI::App& app) {
   cmd->add_flag("--hybrid", a->hybrid,
                 "track with the IMU-seeded KLT first, guided matching for the failed tracks");
   cmd->add_flag("--one-pass", a->no_second_pass, "no second matching pass with the fitted pose");
+  cmd->add_flag("--no-neighbour-depth", a->no_neighbour_depth,
+                "second pass: search keypoints without depth along their whole segment, not along "
+                "the inverse depths their matched neighbours show");
   cmd->add_flag("--fixed-segments", a->fixed_segments,
                 "keypoints without depth: epipolar segments from 0.1 m, not from the nearest "
                 "depth a pilot of matches shows");

@@ -48,6 +48,9 @@ struct MethodRun {
   double refit_ms = 0.0;
   double first_window_px = 0.0;
   double window_px = 0.0;
+  // Of the second pass's segments (keypoints without depth), how many were cut to the inverse
+  // depths their matched neighbours show (EvaluationOptions::neighbour_depth).
+  int narrowed_segments = 0;
   // The fitted motion against the ground truth (when refit.ok), as the record's motion errors.
   double refit_rotation_error_deg = 0.0;
   double refit_translation_error_m = 0.0;

@@ -114,6 +114,7 @@ void EvaluationOptions::Check() const {
   subpixel.Check();
   gyro_bias_filter.Check();
   patch.Check();
+  neighbour_depth.Check();
   klt.Check();
   klt_unseeded.Check();
   IMUMATCH_CHECK(std::isfinite(gain_b) && gain_b > 0.0 && gain_b <= 100.0, "gain_b = " << gain_b);

@@ -13,6 +13,7 @@
 #include "imumatch/imu/gyro_bias_filter.h"
 #include "imumatch/matching/guided_matcher.h"
 #include "imumatch/matching/klt_tracker.h"
+#include "imumatch/matching/neighbour_depth.h"
 #include "imumatch/matching/patch_matching.h"
 #include "imumatch/matching/predictor.h"
 #include "imumatch/matching/subpixel_refinement.h"
@@ -87,6 +88,9 @@ struct EvaluationOptions {
   // disagrees with the IMU.
   bool second_pass = true;
   MotionRefitOptions refit;
+  // Second pass: the segments of keypoints without depth cut to the inverse depths their matched
+  // neighbours show (NeighbourInverseDepthRanges, PredictKeypointsInRanges).
+  NeighbourDepthOptions neighbour_depth;
   // Guided method: the queries still unmatched are looked at again by the image patch (A's patch
   // warped by the prediction, aligned at each candidate: MatchByPatch); charged to matching.
   bool patch_second_look = true;

@@ -9,6 +9,7 @@
 #include "imumatch/matching/grid_index.h"
 #include "imumatch/matching/guided_matcher.h"
 #include "imumatch/matching/klt_tracker.h"
+#include "imumatch/matching/neighbour_depth.h"
 #include "imumatch/matching/patch_matching.h"
 #include "imumatch/matching/scene_depth.h"
 #include "imumatch/matching/subpixel_refinement.h"
@@ -140,8 +141,15 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
                                             : SecondPassOutcome::kNoFit;
     std::vector<KeypointPrediction> second;
     if (run.refit.ok) {
-      PredictKeypoints(SecondPassPredictor(undistorter, run.refit, popts, run.scene_near), ca.ideal,
-                       depths, &second);
+      const KeypointPredictor fitted =
+          SecondPassPredictor(undistorter, run.refit, popts, run.scene_near);
+      std::vector<InverseDepthRange> ranges;
+      if (options.neighbour_depth.enabled) {
+        ranges = NeighbourInverseDepthRanges(
+            ca.ideal, MatchedInverseDepths(fitted, ca.ideal, depths, result.matches, cb.ideal),
+            options.neighbour_depth);
+      }
+      run.narrowed_segments = PredictKeypointsInRanges(fitted, ca.ideal, depths, ranges, &second);
       if (!(SearchArea(second) < SearchArea(predictions))) {
         run.second_pass = SecondPassOutcome::kNotTighter;
       }

@@ -166,7 +166,7 @@ void WritePairsCsv(std::ostream& out, const std::vector<DetectorPairRecord>& rec
          "keypoints_a_with_depth,read_ms,extract_ms,motion_ms,predict_ms,match_ms,matches,correct,"
          "false,possible,precision,recall,motion_rotation_error_deg,motion_translation_error_m,"
          "has_depth,window_recall,from_tracks,from_descriptors,segment_near_m,second_pass,"
-         "refit_sigma_px,window_px\n";
+         "refit_sigma_px,window_px,narrowed_segments\n";
   out << std::setprecision(6);
   for (const auto& r : records) {
     for (const auto& run : r.runs) {
@@ -183,7 +183,7 @@ void WritePairsCsv(std::ostream& out, const std::vector<DetectorPairRecord>& rec
           << "," << run.from_tracks << "," << run.from_descriptors << ","
           << (run.stats.predicted_without_depth > 0 ? run.scene_near.segment_min_depth_m : 0.0)
           << "," << ToString(run.second_pass) << "," << (run.refit.ok ? run.refit.sigma_px : 0.0)
-          << "," << run.window_px << "\n";
+          << "," << run.window_px << "," << run.narrowed_segments << "\n";
     }
   }
 }
@@ -288,7 +288,8 @@ nlohmann::json ReportToJson(const EvaluationResult& result, const ReportContext&
                                        {"fit_translation_error_m", run.refit_translation_error_m},
                                        {"fit_matches_with_depth", run.refit.with_depth},
                                        {"first_window_px", run.first_window_px},
-                                       {"window_px", run.window_px}};
+                                       {"window_px", run.window_px},
+                                       {"narrowed_segments", run.narrowed_segments}};
       }
       if (!run.bf_query_match.empty()) {
         const BruteForceFate f = ComputeBruteForceFate(r, run, thr);

@@ -26,6 +26,7 @@ void FrontEndOptions::Check() const {
   motion.Check();
   pose.Check();
   refit.Check();
+  neighbour_depth.Check();
   IMUMATCH_CHECK(std::isfinite(still_s) && still_s >= 0.0 && still_s <= 3600.0,
                  "still_s=" << still_s);
   IMUMATCH_CHECK(std::isfinite(unknown_velocity_sigma) && unknown_velocity_sigma > 0.0,
@@ -143,7 +144,7 @@ void FrontEnd::Initialise(int64_t t_ns, FrontEndResult& result) {
 
 std::vector<Match> FrontEnd::MatchPass(const CameraMotion& motion, const Features& features,
                                        const std::vector<KeypointInfo>& ideal, const cv::Mat& image,
-                                       bool patch_look,
+                                       bool patch_look, const std::vector<Match>* first_pass,
                                        std::vector<KeypointPrediction>& predictions,
                                        int& from_tracks) {
   const Previous& prev = *previous_;
@@ -154,9 +155,26 @@ std::vector<Match> FrontEnd::MatchPass(const CameraMotion& motion, const Feature
   GuidedCandidates candidates;  // B prepared once for the pilot and the search
   PrepareGuidedCandidates(ideal, grid, DescriptorView::FromMat(features.descriptors), &candidates);
   GuidedSearchScratch scratch;
-  PredictKeypointsInScene(KeypointPredictor(undistorter_, motion, options_.prediction), prev.ideal,
-                          prev.depths, DescriptorView::FromMat(prev.features.descriptors), ideal,
-                          candidates, options_.guided, &predictions, &scratch);
+  const KeypointPredictor predictor(undistorter_, motion, options_.prediction);
+  if (first_pass != nullptr && options_.neighbour_depth.enabled) {
+    // Second pass: the segments' near end of the first pass, and each keypoint without depth
+    // along its neighbours' inverse depths where it has enough of them (no second pilot).
+    const KeypointPredictor segment_predictor =
+        first_scene_.moved ? predictor.WithSegmentMinDepth(first_scene_.segment_min_depth_m)
+                           : predictor;
+    PredictKeypointsInRanges(
+        segment_predictor, prev.ideal, prev.depths,
+        NeighbourInverseDepthRanges(
+            prev.ideal,
+            MatchedInverseDepths(segment_predictor, prev.ideal, prev.depths, *first_pass, ideal),
+            options_.neighbour_depth),
+        &predictions);
+  } else {
+    const SceneNearDepth scene = PredictKeypointsInScene(
+        predictor, prev.ideal, prev.depths, DescriptorView::FromMat(prev.features.descriptors),
+        ideal, candidates, options_.guided, &predictions, &scratch);
+    if (first_pass == nullptr) first_scene_ = scene;
+  }
   std::vector<Match> out;
   std::vector<KeypointPrediction> rest;
   const std::vector<KeypointPrediction>* guided_predictions = &predictions;
@@ -275,8 +293,9 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
       prev.features.keypoints.size() >= 2 && features.keypoints.size() >= 2;
   std::vector<KeypointPrediction> predictions;
   if (imu_ok && enough_features) {
-    result.matches_pass1 = MatchPass(result.imu_motion, features, ideal, gray,
-                                     !options_.second_pass, predictions, result.from_tracks);
+    result.matches_pass1 =
+        MatchPass(result.imu_motion, features, ideal, gray, !options_.second_pass, nullptr,
+                  predictions, result.from_tracks);
   }
   result.status = FrameStatus::kGuided;
   if (!imu_ok || !enough_features ||
@@ -365,8 +384,8 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
     }
     std::vector<KeypointPrediction> predictions2;
     int tracks2 = 0;
-    std::vector<Match> second =
-        MatchPass(refined, features, ideal, gray, true, predictions2, tracks2);
+    std::vector<Match> second = MatchPass(refined, features, ideal, gray, true,
+                                          &result.matches_pass1, predictions2, tracks2);
     // Keep the matches the fitted geometry explains: reprojection (with depth) or epipolar
     // distance (without) within the fit's inlier threshold, in ideal pixels.
     const Eigen::Matrix3d rf = fitted.rotation.toRotationMatrix();

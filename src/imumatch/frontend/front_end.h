@@ -18,8 +18,10 @@
 #include "imumatch/imu/imu_params.h"
 #include "imumatch/matching/guided_matcher.h"
 #include "imumatch/matching/klt_tracker.h"
+#include "imumatch/matching/neighbour_depth.h"
 #include "imumatch/matching/patch_matching.h"
 #include "imumatch/matching/predictor.h"
+#include "imumatch/matching/scene_depth.h"
 #include "imumatch/matching/subpixel_refinement.h"
 
 namespace imumatch {
@@ -76,6 +78,9 @@ struct FrontEndOptions {
   // -> 965.8) at the same precision and relative pose error.
   bool second_pass = true;
   MotionRefitOptions refit;
+  // Second pass: the segments of keypoints without depth cut to the inverse depths their matched
+  // neighbours of the first pass show (NeighbourInverseDepthRanges; KLT tracks are not neighbours).
+  NeighbourDepthOptions neighbour_depth;
   void Check() const;  // throws InvalidArgument
 };
 
@@ -144,11 +149,15 @@ class FrontEnd {
     Rigid3d world_from_cam;
   };
   void Initialise(int64_t t_ns, FrontEndResult& result);
-  // patch_look: add MatchByPatch's matches (options_.patch_second_look permitting).
+  // patch_look: add MatchByPatch's matches (options_.patch_second_look permitting). first_pass:
+  // the first pass's matches, whose depths narrow the segments (options_.neighbour_depth), or null.
   std::vector<Match> MatchPass(const CameraMotion& motion, const Features& features,
                                const std::vector<KeypointInfo>& ideal, const cv::Mat& image,
-                               bool patch_look, std::vector<KeypointPrediction>& predictions,
-                               int& from_tracks);
+                               bool patch_look, const std::vector<Match>* first_pass,
+                               std::vector<KeypointPrediction>& predictions, int& from_tracks);
+  // The segments' near end the last first pass found (PredictKeypointsInScene), which its second
+  // pass keeps.
+  SceneNearDepth first_scene_;
 
   PixelUndistorter undistorter_;
   ImuParams imu_params_;

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <limits>
 #include <vector>
 
 #include "imumatch/matching/match_types.h"
@@ -21,9 +22,11 @@ namespace imumatch {
 // the widening and the minimum count of neighbours.
 struct NeighbourDepthOptions {
   bool enabled = true;
-  // Neighbours: matched keypoints of A within radius_px (ideal pixels) of the keypoint, itself
-  // included when it was matched; fewer than min_neighbours of them: the segment is kept.
-  double radius_px = 40.0;
+  // Neighbours: the keypoints of A with an inverse depth in the 3 x 3 cells of cell_px (ideal
+  // pixels, a grid over A's keypoints) around the keypoint's own cell, itself included when it has
+  // one: 24-48 px away on each side (a 72 px square, about the area of a 40 px radius); fewer than
+  // min_neighbours of them: no range.
+  double cell_px = 24.0;
   int min_neighbours = 3;
   // The range [rho_min / range_factor, rho_max * range_factor] of the neighbours' inverse depths
   // (depth from half the nearest one's to twice the farthest one's for range_factor 2).
@@ -42,16 +45,29 @@ std::vector<double> MatchedInverseDepths(const KeypointPredictor& predictor,
                                          const std::vector<Match>& matches,
                                          const std::vector<KeypointInfo>& keypoints_b);
 
-// Replaces each prediction without depth (kWithoutDepth) by the prediction along its neighbours'
-// inverse-depth range (KeypointPredictor::PredictInInverseDepthRange with predictor) when it has
-// at least min_neighbours neighbours with an inverse depth (inverse_depths: per keypoint of A, NaN
-// = none) and that prediction still has a window. Returns how many were replaced. predictions: one
-// per keypoint of A, as PredictKeypoints makes them with predictor. Throws InvalidArgument on size
-// mismatches.
-int NarrowSegmentsToNeighbours(const KeypointPredictor& predictor,
-                               const std::vector<KeypointInfo>& keypoints_a,
-                               const std::vector<double>& inverse_depths,
-                               const NeighbourDepthOptions& options,
-                               std::vector<KeypointPrediction>* predictions);
+// An inverse-depth interval (1/m); NaN ends: none.
+struct InverseDepthRange {
+  double rho_far = std::numeric_limits<double>::quiet_NaN();
+  double rho_near = std::numeric_limits<double>::quiet_NaN();
+  bool valid() const { return rho_far <= rho_near; }
+};
+
+// Per keypoint of A, the widened range of its neighbours' inverse depths (inverse_depths: per
+// keypoint of A, NaN = none; see NeighbourDepthOptions); none where it has fewer than
+// min_neighbours or options.enabled is false. O(keypoints + cells). Throws InvalidArgument on a
+// size mismatch or bad options.
+std::vector<InverseDepthRange> NeighbourInverseDepthRanges(
+    const std::vector<KeypointInfo>& keypoints_a, const std::vector<double>& inverse_depths,
+    const NeighbourDepthOptions& options);
+
+// PredictKeypoints, except that a keypoint without a usable depth and with a valid range is
+// predicted along it (KeypointPredictor::PredictInInverseDepthRange), unless that leaves it no
+// window (then as PredictKeypoints). Each keypoint is predicted once. Returns how many were
+// predicted along their range. ranges: one per keypoint, or empty (= PredictKeypoints).
+int PredictKeypointsInRanges(const KeypointPredictor& predictor,
+                             const std::vector<KeypointInfo>& keypoints,
+                             const std::vector<float>& depths_m,
+                             const std::vector<InverseDepthRange>& ranges,
+                             std::vector<KeypointPrediction>* predictions);
 
 }  // namespace imumatch

@@ -137,9 +137,8 @@ TEST(NeighbourDepthTest, InverseDepthRangeEndsWhereThePointsAtThoseDepthsProject
 TEST(NeighbourDepthTest, SegmentsShrinkToTheWallTheirNeighboursLieOnAndKeepEveryPartner) {
   const TwoWallScene s = MakeTwoWallScene(800, 7);
   const KeypointPredictor predictor(s.camera, ExactMotion(), PredictionOptions());
-  std::vector<KeypointPrediction> predictions;
-  PredictKeypoints(predictor, s.kps_a, {}, &predictions);
-  const std::vector<KeypointPrediction> before = predictions;
+  std::vector<KeypointPrediction> before, predictions;
+  PredictKeypoints(predictor, s.kps_a, {}, &before);
   // Every other keypoint matched to its true partner; the rest are what the second pass looks for.
   std::vector<Match> matches;
   for (int i = 0; i < 800; i += 2) {
@@ -147,8 +146,9 @@ TEST(NeighbourDepthTest, SegmentsShrinkToTheWallTheirNeighboursLieOnAndKeepEvery
     matches.back().query_idx = matches.back().train_idx = i;
   }
   const std::vector<double> rho = MatchedInverseDepths(predictor, s.kps_a, {}, matches, s.kps_b);
-  const int narrowed =
-      NarrowSegmentsToNeighbours(predictor, s.kps_a, rho, NeighbourDepthOptions(), &predictions);
+  const int narrowed = PredictKeypointsInRanges(
+      predictor, s.kps_a, {}, NeighbourInverseDepthRanges(s.kps_a, rho, NeighbourDepthOptions()),
+      &predictions);
 
   int inside_before = 0, inside_after = 0, edge_inside = 0, edge = 0;
   double length_before = 0.0, length_after = 0.0;
@@ -158,14 +158,14 @@ TEST(NeighbourDepthTest, SegmentsShrinkToTheWallTheirNeighboursLieOnAndKeepEvery
     inside_after += predictions[i].Contains(s.kps_b[i].x, s.kps_b[i].y);
     length_before += SegmentLength(before[i]);
     length_after += SegmentLength(predictions[i]);
-    // Keypoints within the radius of the walls' border have neighbours on both walls.
-    if (std::fabs(s.kps_a[i].x - 320.0f) < 40.0f) {
+    // Keypoints within a cell of the walls' border have neighbours on both walls.
+    if (std::fabs(s.kps_a[i].x - 320.0f) < 24.0f) {
       ++edge;
       edge_inside += predictions[i].Contains(s.kps_b[i].x, s.kps_b[i].y);
     }
   }
-  // 400 matched points over 640 x 480: 6.5 within 40 px on average; a few keypoints have fewer
-  // than 3 (Poisson: about 4 %) and keep their segments.
+  // 400 matched points over 640 x 480: 6.8 in a 72 px square on average; a few keypoints have
+  // fewer than 3 (Poisson: about 4 %) and keep their segments.
   EXPECT_GT(narrowed, 740);
   int kept = 0;
   for (size_t i = 0; i < s.kps_a.size(); ++i) {
@@ -184,7 +184,7 @@ TEST(NeighbourDepthTest, SegmentsShrinkToTheWallTheirNeighboursLieOnAndKeepEvery
 
 TEST(NeighbourDepthTest, AKeypointWithTooFewNeighboursKeepsItsSegment) {
   TwoWallScene s = MakeTwoWallScene(3, 9);
-  // Three keypoints far apart (> 40 px): each has only itself as a neighbour.
+  // Three keypoints far apart (cells not adjacent): each has only itself as a neighbour.
   s.kps_a[0].x = 50.0f;
   s.kps_a[0].y = 50.0f;
   s.kps_a[1].x = 300.0f;
@@ -192,30 +192,45 @@ TEST(NeighbourDepthTest, AKeypointWithTooFewNeighboursKeepsItsSegment) {
   s.kps_a[2].x = 590.0f;
   s.kps_a[2].y = 430.0f;
   const KeypointPredictor predictor(s.camera, ExactMotion(), PredictionOptions());
-  std::vector<KeypointPrediction> predictions;
-  PredictKeypoints(predictor, s.kps_a, {}, &predictions);
-  const std::vector<KeypointPrediction> before = predictions;
-  const std::vector<double> rho = {0.5, 0.5, 0.5};
+  std::vector<KeypointPrediction> before, predictions;
+  PredictKeypoints(predictor, s.kps_a, {}, &before);
+  const std::vector<double> rho = {0.5, 0.25, 0.0};
   NeighbourDepthOptions options;
-  EXPECT_EQ(NarrowSegmentsToNeighbours(predictor, s.kps_a, rho, options, &predictions), 0);
-  for (size_t i = 0; i < 3; ++i) EXPECT_EQ(predictions[i].segment_end, before[i].segment_end);
-  // With one neighbour enough, each is cut to its own measured depth (1 / 0.5 = 2 m, widened
-  // to 1-4 m).
+  std::vector<InverseDepthRange> ranges = NeighbourInverseDepthRanges(s.kps_a, rho, options);
+  for (const InverseDepthRange& r : ranges) EXPECT_FALSE(r.valid());
+  EXPECT_EQ(PredictKeypointsInRanges(predictor, s.kps_a, {}, ranges, &predictions), 0);
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(predictions[i].segment_start, before[i].segment_start);
+    EXPECT_EQ(predictions[i].segment_end, before[i].segment_end);
+  }
+  // With one neighbour enough, each is cut to its own inverse depth widened 2x each side: 2 m
+  // -> 1-4 m, 4 m -> 2-8 m, and infinity stays a point there.
   options.min_neighbours = 1;
-  EXPECT_EQ(NarrowSegmentsToNeighbours(predictor, s.kps_a, rho, options, &predictions), 3);
+  ranges = NeighbourInverseDepthRanges(s.kps_a, rho, options);
+  EXPECT_DOUBLE_EQ(ranges[0].rho_far, 0.25);
+  EXPECT_DOUBLE_EQ(ranges[0].rho_near, 1.0);
+  EXPECT_DOUBLE_EQ(ranges[1].rho_far, 0.125);
+  EXPECT_DOUBLE_EQ(ranges[1].rho_near, 0.5);
+  EXPECT_DOUBLE_EQ(ranges[2].rho_far, 0.0);
+  EXPECT_DOUBLE_EQ(ranges[2].rho_near, 0.0);
+  EXPECT_EQ(PredictKeypointsInRanges(predictor, s.kps_a, {}, ranges, &predictions), 3);
   for (size_t i = 0; i < 3; ++i) {
     EXPECT_LT(SegmentLength(predictions[i]), SegmentLength(before[i]));
   }
-  // Disabled: nothing changes.
-  predictions = before;
+  // A keypoint with a usable depth is predicted from it, whatever its range.
+  const std::vector<float> depths = {2.0f, std::nanf(""), 0.0f};
+  EXPECT_EQ(PredictKeypointsInRanges(predictor, s.kps_a, depths, ranges, &predictions), 2);
+  EXPECT_EQ(predictions[0].status, PredictionStatus::kWithDepth);
+  // Disabled: no ranges.
   options.enabled = false;
-  EXPECT_EQ(NarrowSegmentsToNeighbours(predictor, s.kps_a, rho, options, &predictions), 0);
+  ranges = NeighbourInverseDepthRanges(s.kps_a, rho, options);
+  EXPECT_EQ(PredictKeypointsInRanges(predictor, s.kps_a, {}, ranges, &predictions), 0);
 }
 
 TEST(NeighbourDepthTest, RejectsBadOptionsAndSizes) {
   NeighbourDepthOptions o;
   EXPECT_NO_THROW(o.Check());
-  o.radius_px = 0.0;
+  o.cell_px = 0.0;
   EXPECT_THROW(o.Check(), InvalidArgument);
   o = NeighbourDepthOptions();
   o.min_neighbours = 0;
@@ -227,15 +242,23 @@ TEST(NeighbourDepthTest, RejectsBadOptionsAndSizes) {
   EXPECT_THROW(o.Check(), InvalidArgument);
 
   const TwoWallScene s = MakeTwoWallScene(4, 11);
+  EXPECT_THROW(NeighbourInverseDepthRanges(s.kps_a, {0.1, 0.1}, NeighbourDepthOptions()),
+               InvalidArgument);
+  EXPECT_THROW(NeighbourInverseDepthRanges(s.kps_a, {0.1, 0.1, 0.1, 0.1}, o), InvalidArgument);
   const KeypointPredictor predictor(s.camera, ExactMotion(), PredictionOptions());
-  std::vector<KeypointPrediction> predictions(4);
-  EXPECT_THROW(NarrowSegmentsToNeighbours(predictor, s.kps_a, {0.1, 0.1}, NeighbourDepthOptions(),
-                                          &predictions),
+  std::vector<KeypointPrediction> predictions;
+  EXPECT_THROW(PredictKeypointsInRanges(predictor, s.kps_a, {}, std::vector<InverseDepthRange>(3),
+                                        &predictions),
                InvalidArgument);
-  predictions.resize(3);
-  EXPECT_THROW(NarrowSegmentsToNeighbours(predictor, s.kps_a, {0.1, 0.1, 0.1, 0.1},
-                                          NeighbourDepthOptions(), &predictions),
+  EXPECT_THROW(PredictKeypointsInRanges(predictor, s.kps_a, {1.0f}, {}, &predictions),
                InvalidArgument);
+  // No ranges at all: PredictKeypoints.
+  std::vector<KeypointPrediction> plain;
+  PredictKeypoints(predictor, s.kps_a, {}, &plain);
+  EXPECT_EQ(PredictKeypointsInRanges(predictor, s.kps_a, {}, {}, &predictions), 0);
+  ASSERT_EQ(predictions.size(), plain.size());
+  for (size_t i = 0; i < plain.size(); ++i)
+    EXPECT_EQ(predictions[i].segment_end, plain[i].segment_end);
 }
 
 }  // namespace

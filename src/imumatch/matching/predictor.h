@@ -207,7 +207,7 @@ class KeypointPredictor {
   // A keypoint without depth searched along the part of its epipolar segment between the inverse
   // depths rho_far <= rho_near (1/m; 0 is infinity) that lies within the configured segment
   // [1 / segment_max_depth, 1 / segment_min_depth]: for a depth range the scene around the
-  // keypoint shows (NarrowSegmentsToNeighbours). A range outside the configured one (or NaN):
+  // keypoint shows (PredictKeypointsInRanges). A range outside the configured one (or NaN):
   // the configured segment, as Predict without depth. Runs even when predict_without_depth is off.
   KeypointPrediction PredictInInverseDepthRange(const Eigen::Vector2d& uv_a, double rho_far,
                                                 double rho_near, double sigma_scale = 1.0) const;
