@@ -418,9 +418,10 @@ TEST(EvalFlightTest, InFlightTheSegmentsStartWhereTheSceneDoes) {
 }
 
 TEST(EvalFlightTest, InFlightTheSecondPassShrinksTheWindows) {
-  // Pairs 100-119: the motion fitted to the first pass's matches is tighter than the IMU's, so
-  // the second pass searches smaller windows (the window recall above is that of its windows)
-  // in almost every pair.
+  // Pairs 100-119: the motion fitted to the first pass's matches is tighter than the IMU's, and
+  // the first pass's matches bound the depths of their neighbours, so the second pass searches
+  // smaller windows and shorter segments (the window recall above is that of its windows) in
+  // almost every pair.
   const FlightRun& run = FlightImu();
   for (DetectorKind d : {DetectorKind::kOrb, DetectorKind::kSift}) {
     SCOPED_TRACE(ToString(d));
@@ -437,6 +438,10 @@ TEST(EvalFlightTest, InFlightTheSecondPassShrinksTheWindows) {
           EXPECT_LT(mr.window_px, 0.95 * mr.first_window_px) << r.frame_a;
         }
         EXPECT_LE(mr.refit.sigma_px, std::sqrt(2.0)) << r.frame_a;
+        // Nearly every keypoint without depth has matched neighbours: its segment is cut to their
+        // inverse depths (the window recall above is that of the cut segments).
+        EXPECT_GE(mr.narrowed_segments, 0.8 * mr.stats.predicted_without_depth) << r.frame_a;
+        EXPECT_LE(mr.narrowed_segments, mr.stats.predicted_without_depth) << r.frame_a;
         // The fit and the IMU agree with the ground truth to millimetres and thousandths of a
         // degree (its error is of the ground truth's own size).
         EXPECT_LT(mr.refit_translation_error_m, 0.02) << r.frame_a;
