@@ -317,8 +317,11 @@ KeypointPrediction KeypointPredictor::Predict(const Eigen::Vector2d& uv_a, doubl
   }
 
   if (!options_.predict_without_depth) return p;  // kInvalid
-  return PredictAlongSegment(uv_a, rx, range_a, pixel_cov_a, pixel_var,
-                             1.0 / options_.segment_max_depth, 1.0 / options_.segment_min_depth);
+  // Filled in place: returning another object from this path would cost the named return value
+  // of the others (a copy of p on every prediction with depth).
+  PredictAlongSegment(uv_a, rx, range_a, pixel_cov_a, pixel_var, 1.0 / options_.segment_max_depth,
+                      1.0 / options_.segment_min_depth, p);
+  return p;
 }
 
 KeypointPrediction KeypointPredictor::PredictInInverseDepthRange(const Eigen::Vector2d& uv_a,
@@ -334,16 +337,15 @@ KeypointPrediction KeypointPredictor::PredictInInverseDepthRange(const Eigen::Ve
     lo = std::max(rho_far, lo);
     hi = std::min(rho_near, hi);
   }
-  return PredictAlongSegment(uv_a, r_ * xa, xa.norm(), PixelNoise(uv_a, pixel_var), pixel_var, lo,
-                             hi);
+  KeypointPrediction p;
+  PredictAlongSegment(uv_a, r_ * xa, xa.norm(), PixelNoise(uv_a, pixel_var), pixel_var, lo, hi, p);
+  return p;
 }
 
-KeypointPrediction KeypointPredictor::PredictAlongSegment(const Eigen::Vector2d& uv_a,
-                                                          const Eigen::Vector3d& rx, double range_a,
-                                                          const Eigen::Matrix2d& pixel_cov_a,
-                                                          double pixel_var, double rho_lo,
-                                                          double rho_hi) const {
-  KeypointPrediction p;
+void KeypointPredictor::PredictAlongSegment(const Eigen::Vector2d& uv_a, const Eigen::Vector3d& rx,
+                                            double range_a, const Eigen::Matrix2d& pixel_cov_a,
+                                            double pixel_var, double rho_lo, double rho_hi,
+                                            KeypointPrediction& p) const {
   // The inverse-depth interval [rho_lo, rho_hi] of the swept segment, cut to the part in front of
   // camera B: q_z(rho) = rx.z + rho t.z > kMinForwardDepth.
   if (t_.z() > 0.0) {
@@ -356,14 +358,14 @@ KeypointPrediction KeypointPredictor::PredictAlongSegment(const Eigen::Vector2d&
   if (rx.z() > kMinForwardDepth) p.uv = RotationOnly(uv_a).cast<float>();
   if (!(rho_lo <= rho_hi)) {
     p.status = PredictionStatus::kBehindCamera;
-    return p;
+    return;
   }
   const Eigen::Vector3d q_near = rx + rho_hi * t_;  // the z_min end
   const Eigen::Vector3d q_far = rx + rho_lo * t_;   // the z_max end
   Eigen::Vector2d e0 = PinholeProject(q_near), e1 = PinholeProject(q_far);
   if (!ClipSegment(e0, e1, min_x_, min_y_, max_x_, max_y_)) {
     p.status = PredictionStatus::kOutsideImage;
-    return p;
+    return;
   }
   p.status = PredictionStatus::kWithoutDepth;
   p.segment_start = e0.cast<float>();
@@ -411,7 +413,6 @@ KeypointPrediction KeypointPredictor::PredictAlongSegment(const Eigen::Vector2d&
   const double s_near = range_a / q_near.norm(), s_far = range_a / q_far.norm();
   p.scale_min = static_cast<float>(std::min(s_near, s_far));
   p.scale_max = static_cast<float>(std::max(s_near, s_far));
-  return p;
 }
 
 float ReferenceKeypointSize(const std::vector<KeypointInfo>& keypoints) {

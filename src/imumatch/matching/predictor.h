@@ -236,11 +236,11 @@ class KeypointPredictor {
 
  private:
   void Init(const CameraMotion& motion);
-  // The prediction without depth along the inverse depths [rho_lo, rho_hi]; rx = R x_a, range_a =
-  // |x_a|, the keypoint noise of A as Predict computes them.
-  KeypointPrediction PredictAlongSegment(const Eigen::Vector2d& uv_a, const Eigen::Vector3d& rx,
-                                         double range_a, const Eigen::Matrix2d& pixel_cov_a,
-                                         double pixel_var, double rho_lo, double rho_hi) const;
+  // The prediction without depth along the inverse depths [rho_lo, rho_hi] into p (default
+  // constructed); rx = R x_a, range_a = |x_a|, the keypoint noise of A as Predict computes them.
+  void PredictAlongSegment(const Eigen::Vector2d& uv_a, const Eigen::Vector3d& rx, double range_a,
+                           const Eigen::Matrix2d& pixel_cov_a, double pixel_var, double rho_lo,
+                           double rho_hi, KeypointPrediction& p) const;
   Eigen::Vector2d PinholeProject(const Eigen::Vector3d& q) const;
   // Isotropic image-pixel variance -> covariance in ideal pixels at the ideal position uv.
   Eigen::Matrix2d PixelNoise(const Eigen::Vector2d& uv, double pixel_variance) const;
