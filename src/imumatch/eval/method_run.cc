@@ -143,13 +143,8 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
     if (run.refit.ok) {
       const KeypointPredictor fitted =
           SecondPassPredictor(undistorter, run.refit, popts, run.scene_near);
-      std::vector<InverseDepthRange> ranges;
-      if (options.neighbour_depth.enabled) {
-        ranges = NeighbourInverseDepthRanges(
-            ca.ideal, MatchedInverseDepths(fitted, ca.ideal, depths, result.matches, cb.ideal),
-            options.neighbour_depth);
-      }
-      run.narrowed_segments = PredictKeypointsInRanges(fitted, ca.ideal, depths, ranges, &second);
+      run.narrowed_segments = PredictKeypointsNearMatches(
+          fitted, ca.ideal, depths, result.matches, cb.ideal, options.neighbour_depth, &second);
       if (!(SearchArea(second) < SearchArea(predictions))) {
         run.second_pass = SecondPassOutcome::kNotTighter;
       }

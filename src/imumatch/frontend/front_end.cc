@@ -145,6 +145,7 @@ void FrontEnd::Initialise(int64_t t_ns, FrontEndResult& result) {
 std::vector<Match> FrontEnd::MatchPass(const CameraMotion& motion, const Features& features,
                                        const std::vector<KeypointInfo>& ideal, const cv::Mat& image,
                                        bool patch_look, const std::vector<Match>* first_pass,
+                                       SceneNearDepth& scene,
                                        std::vector<KeypointPrediction>& predictions,
                                        int& from_tracks) {
   const Previous& prev = *previous_;
@@ -157,23 +158,14 @@ std::vector<Match> FrontEnd::MatchPass(const CameraMotion& motion, const Feature
   GuidedSearchScratch scratch;
   const KeypointPredictor predictor(undistorter_, motion, options_.prediction);
   if (first_pass != nullptr && options_.neighbour_depth.enabled) {
-    // Second pass: the segments' near end of the first pass, and each keypoint without depth
-    // along its neighbours' inverse depths where it has enough of them (no second pilot).
-    const KeypointPredictor segment_predictor =
-        first_scene_.moved ? predictor.WithSegmentMinDepth(first_scene_.segment_min_depth_m)
-                           : predictor;
-    PredictKeypointsInRanges(
-        segment_predictor, prev.ideal, prev.depths,
-        NeighbourInverseDepthRanges(
-            prev.ideal,
-            MatchedInverseDepths(segment_predictor, prev.ideal, prev.depths, *first_pass, ideal),
-            options_.neighbour_depth),
-        &predictions);
+    // Second pass: the first pass's near end, and each keypoint without depth along its
+    // neighbours' inverse depths where it has enough of them (no second pilot).
+    PredictKeypointsNearMatches(predictor.WithSceneNearEnd(scene), prev.ideal, prev.depths,
+                                *first_pass, ideal, options_.neighbour_depth, &predictions);
   } else {
-    const SceneNearDepth scene = PredictKeypointsInScene(
-        predictor, prev.ideal, prev.depths, DescriptorView::FromMat(prev.features.descriptors),
-        ideal, candidates, options_.guided, &predictions, &scratch);
-    if (first_pass == nullptr) first_scene_ = scene;
+    scene = PredictKeypointsInScene(predictor, prev.ideal, prev.depths,
+                                    DescriptorView::FromMat(prev.features.descriptors), ideal,
+                                    candidates, options_.guided, &predictions, &scratch);
   }
   std::vector<Match> out;
   std::vector<KeypointPrediction> rest;
@@ -292,9 +284,10 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
   const bool enough_features =
       prev.features.keypoints.size() >= 2 && features.keypoints.size() >= 2;
   std::vector<KeypointPrediction> predictions;
+  SceneNearDepth scene;  // where the first pass's segments start, kept by the second
   if (imu_ok && enough_features) {
     result.matches_pass1 =
-        MatchPass(result.imu_motion, features, ideal, gray, !options_.second_pass, nullptr,
+        MatchPass(result.imu_motion, features, ideal, gray, !options_.second_pass, nullptr, scene,
                   predictions, result.from_tracks);
   }
   result.status = FrameStatus::kGuided;
@@ -385,7 +378,7 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
     std::vector<KeypointPrediction> predictions2;
     int tracks2 = 0;
     std::vector<Match> second = MatchPass(refined, features, ideal, gray, true,
-                                          &result.matches_pass1, predictions2, tracks2);
+                                          &result.matches_pass1, scene, predictions2, tracks2);
     // Keep the matches the fitted geometry explains: reprojection (with depth) or epipolar
     // distance (without) within the fit's inlier threshold, in ideal pixels.
     const Eigen::Matrix3d rf = fitted.rotation.toRotationMatrix();

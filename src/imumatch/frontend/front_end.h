@@ -21,7 +21,6 @@
 #include "imumatch/matching/neighbour_depth.h"
 #include "imumatch/matching/patch_matching.h"
 #include "imumatch/matching/predictor.h"
-#include "imumatch/matching/scene_depth.h"
 #include "imumatch/matching/subpixel_refinement.h"
 
 namespace imumatch {
@@ -151,13 +150,13 @@ class FrontEnd {
   void Initialise(int64_t t_ns, FrontEndResult& result);
   // patch_look: add MatchByPatch's matches (options_.patch_second_look permitting). first_pass:
   // the first pass's matches, whose depths narrow the segments (options_.neighbour_depth), or null.
+  // scene: set to the segments' near end the pass finds (PredictKeypointsInScene); a second pass
+  // that narrows the segments keeps the first pass's instead.
   std::vector<Match> MatchPass(const CameraMotion& motion, const Features& features,
                                const std::vector<KeypointInfo>& ideal, const cv::Mat& image,
                                bool patch_look, const std::vector<Match>* first_pass,
-                               std::vector<KeypointPrediction>& predictions, int& from_tracks);
-  // The segments' near end the last first pass found (PredictKeypointsInScene), which its second
-  // pass keeps.
-  SceneNearDepth first_scene_;
+                               SceneNearDepth& scene, std::vector<KeypointPrediction>& predictions,
+                               int& from_tracks);
 
   PixelUndistorter undistorter_;
   ImuParams imu_params_;

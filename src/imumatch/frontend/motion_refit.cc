@@ -399,10 +399,8 @@ KeypointPredictor SecondPassPredictor(const PixelUndistorter& undistorter, const
                                       const PredictionOptions& prediction,
                                       const SceneNearDepth& first_pass_scene) {
   IMUMATCH_CHECK(refit.ok, "no fitted motion for a second pass: " << refit.reason);
-  const KeypointPredictor predictor(undistorter, refit.motion, prediction);
-  return first_pass_scene.moved
-             ? predictor.WithSegmentMinDepth(first_pass_scene.segment_min_depth_m)
-             : predictor;
+  return KeypointPredictor(undistorter, refit.motion, prediction)
+      .WithSceneNearEnd(first_pass_scene);
 }
 
 double SearchArea(const std::vector<KeypointPrediction>& predictions) {

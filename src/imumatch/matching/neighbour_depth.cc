@@ -107,40 +107,20 @@ std::vector<InverseDepthRange> NeighbourInverseDepthRanges(
   return ranges;
 }
 
-int PredictKeypointsInRanges(const KeypointPredictor& predictor,
-                             const std::vector<KeypointInfo>& keypoints,
-                             const std::vector<float>& depths_m,
-                             const std::vector<InverseDepthRange>& ranges,
-                             std::vector<KeypointPrediction>* predictions) {
-  IMUMATCH_CHECK(predictions != nullptr, "PredictKeypointsInRanges needs predictions");
-  const size_t n = keypoints.size();
-  IMUMATCH_CHECK(depths_m.empty() || depths_m.size() == n,
-                 depths_m.size() << " depths for " << n << " keypoints");
-  IMUMATCH_CHECK(ranges.empty() || ranges.size() == n,
-                 ranges.size() << " inverse-depth ranges for " << n << " keypoints");
-  predictions->resize(n);
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  const float reference = ReferenceKeypointSize(keypoints);
-  const PredictionOptions& po = predictor.options();
-  int in_range = 0;
-  for (size_t i = 0; i < n; ++i) {
-    const KeypointInfo& k = keypoints[i];
-    const Eigen::Vector2d uv(k.x, k.y);
-    const float depth = depths_m.empty() ? nan : depths_m[i];
-    const double sigma_scale = KeypointSigmaScale(po, k, reference);
-    KeypointPrediction& p = (*predictions)[i];
-    if (!ranges.empty() && ranges[i].valid() && po.predict_without_depth &&
-        !po.IsUsableDepth(depth)) {
-      p = predictor.PredictInInverseDepthRange(uv, ranges[i].rho_far, ranges[i].rho_near,
-                                               sigma_scale);
-      if (p.status == PredictionStatus::kWithoutDepth) {
-        ++in_range;
-        continue;
-      }
-    }
-    p = predictor.Predict(uv, depth, sigma_scale);
+int PredictKeypointsNearMatches(const KeypointPredictor& predictor,
+                                const std::vector<KeypointInfo>& keypoints_a,
+                                const std::vector<float>& depths_m,
+                                const std::vector<Match>& matches,
+                                const std::vector<KeypointInfo>& keypoints_b,
+                                const NeighbourDepthOptions& options,
+                                std::vector<KeypointPrediction>* predictions) {
+  std::vector<InverseDepthRange> ranges;
+  if (options.enabled) {
+    ranges = NeighbourInverseDepthRanges(
+        keypoints_a, MatchedInverseDepths(predictor, keypoints_a, depths_m, matches, keypoints_b),
+        options);
   }
-  return in_range;
+  return PredictKeypointsInRanges(predictor, keypoints_a, depths_m, ranges, predictions);
 }
 
 }  // namespace imumatch

@@ -1,6 +1,5 @@
 #pragma once
 
-#include <limits>
 #include <vector>
 
 #include "imumatch/matching/match_types.h"
@@ -45,13 +44,6 @@ std::vector<double> MatchedInverseDepths(const KeypointPredictor& predictor,
                                          const std::vector<Match>& matches,
                                          const std::vector<KeypointInfo>& keypoints_b);
 
-// An inverse-depth interval (1/m); NaN ends: none.
-struct InverseDepthRange {
-  double rho_far = std::numeric_limits<double>::quiet_NaN();
-  double rho_near = std::numeric_limits<double>::quiet_NaN();
-  bool valid() const { return rho_far <= rho_near; }
-};
-
 // Per keypoint of A, the widened range of its neighbours' inverse depths (inverse_depths: per
 // keypoint of A, NaN = none; see NeighbourDepthOptions); none where it has fewer than
 // min_neighbours or options.enabled is false. O(keypoints + cells). Throws InvalidArgument on a
@@ -60,14 +52,16 @@ std::vector<InverseDepthRange> NeighbourInverseDepthRanges(
     const std::vector<KeypointInfo>& keypoints_a, const std::vector<double>& inverse_depths,
     const NeighbourDepthOptions& options);
 
-// PredictKeypoints, except that a keypoint without a usable depth and with a valid range is
-// predicted along it (KeypointPredictor::PredictInInverseDepthRange), unless that leaves it no
-// window (then as PredictKeypoints). Each keypoint is predicted once. Returns how many were
-// predicted along their range. ranges: one per keypoint, or empty (= PredictKeypoints).
-int PredictKeypointsInRanges(const KeypointPredictor& predictor,
-                             const std::vector<KeypointInfo>& keypoints,
-                             const std::vector<float>& depths_m,
-                             const std::vector<InverseDepthRange>& ranges,
-                             std::vector<KeypointPrediction>* predictions);
+// The second pass's predictions in one call: PredictKeypointsInRanges with the ranges that
+// NeighbourInverseDepthRanges finds around the inverse depths MatchedInverseDepths measures
+// (PredictKeypoints when options.enabled is false). Returns how many keypoints were predicted
+// along their range.
+int PredictKeypointsNearMatches(const KeypointPredictor& predictor,
+                                const std::vector<KeypointInfo>& keypoints_a,
+                                const std::vector<float>& depths_m,
+                                const std::vector<Match>& matches,
+                                const std::vector<KeypointInfo>& keypoints_b,
+                                const NeighbourDepthOptions& options,
+                                std::vector<KeypointPrediction>* predictions);
 
 }  // namespace imumatch

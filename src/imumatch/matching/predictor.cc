@@ -277,6 +277,27 @@ double KeypointPredictor::InverseDepthOf(const Eigen::Vector2d& uv_a,
 
 KeypointPrediction KeypointPredictor::Predict(const Eigen::Vector2d& uv_a, double depth_m,
                                               double sigma_scale) const {
+  if (!options_.predict_without_depth && !options_.IsUsableDepth(depth_m)) {
+    return KeypointPrediction();  // kInvalid
+  }
+  return PredictWithSegment(uv_a, depth_m, sigma_scale, 1.0 / options_.segment_max_depth,
+                            1.0 / options_.segment_min_depth);
+}
+
+KeypointPrediction KeypointPredictor::PredictInInverseDepthRange(const Eigen::Vector2d& uv_a,
+                                                                 double rho_far, double rho_near,
+                                                                 double sigma_scale) const {
+  double lo = 1.0 / options_.segment_max_depth, hi = 1.0 / options_.segment_min_depth;
+  if (rho_far <= rho_near && rho_near >= lo && rho_far <= hi) {  // overlaps (not NaN)
+    lo = std::max(rho_far, lo);
+    hi = std::min(rho_near, hi);
+  }
+  return PredictWithSegment(uv_a, std::numeric_limits<double>::quiet_NaN(), sigma_scale, lo, hi);
+}
+
+KeypointPrediction KeypointPredictor::PredictWithSegment(const Eigen::Vector2d& uv_a,
+                                                         double depth_m, double sigma_scale,
+                                                         double rho_lo, double rho_hi) const {
   KeypointPrediction p;
   if (!uv_a.allFinite() || !std::isfinite(sigma_scale)) return p;
   const Eigen::Vector2d xy = camera_.IdealToNormalized(uv_a);
@@ -316,36 +337,6 @@ KeypointPrediction KeypointPredictor::Predict(const Eigen::Vector2d& uv_a, doubl
     return p;
   }
 
-  if (!options_.predict_without_depth) return p;  // kInvalid
-  // Filled in place: returning another object from this path would cost the named return value
-  // of the others (a copy of p on every prediction with depth).
-  PredictAlongSegment(uv_a, rx, range_a, pixel_cov_a, pixel_var, 1.0 / options_.segment_max_depth,
-                      1.0 / options_.segment_min_depth, p);
-  return p;
-}
-
-KeypointPrediction KeypointPredictor::PredictInInverseDepthRange(const Eigen::Vector2d& uv_a,
-                                                                 double rho_far, double rho_near,
-                                                                 double sigma_scale) const {
-  if (!uv_a.allFinite() || !std::isfinite(sigma_scale)) return KeypointPrediction();
-  const Eigen::Vector2d xy = camera_.IdealToNormalized(uv_a);
-  const Eigen::Vector3d xa(xy.x(), xy.y(), 1.0);
-  const double sigma_px = options_.keypoint_sigma_px * sigma_scale;
-  const double pixel_var = sigma_px * sigma_px;
-  double lo = 1.0 / options_.segment_max_depth, hi = 1.0 / options_.segment_min_depth;
-  if (rho_far <= rho_near && rho_near >= lo && rho_far <= hi) {  // overlaps (not NaN)
-    lo = std::max(rho_far, lo);
-    hi = std::min(rho_near, hi);
-  }
-  KeypointPrediction p;
-  PredictAlongSegment(uv_a, r_ * xa, xa.norm(), PixelNoise(uv_a, pixel_var), pixel_var, lo, hi, p);
-  return p;
-}
-
-void KeypointPredictor::PredictAlongSegment(const Eigen::Vector2d& uv_a, const Eigen::Vector3d& rx,
-                                            double range_a, const Eigen::Matrix2d& pixel_cov_a,
-                                            double pixel_var, double rho_lo, double rho_hi,
-                                            KeypointPrediction& p) const {
   // The inverse-depth interval [rho_lo, rho_hi] of the swept segment, cut to the part in front of
   // camera B: q_z(rho) = rx.z + rho t.z > kMinForwardDepth.
   if (t_.z() > 0.0) {
@@ -358,14 +349,14 @@ void KeypointPredictor::PredictAlongSegment(const Eigen::Vector2d& uv_a, const E
   if (rx.z() > kMinForwardDepth) p.uv = RotationOnly(uv_a).cast<float>();
   if (!(rho_lo <= rho_hi)) {
     p.status = PredictionStatus::kBehindCamera;
-    return;
+    return p;
   }
   const Eigen::Vector3d q_near = rx + rho_hi * t_;  // the z_min end
   const Eigen::Vector3d q_far = rx + rho_lo * t_;   // the z_max end
   Eigen::Vector2d e0 = PinholeProject(q_near), e1 = PinholeProject(q_far);
   if (!ClipSegment(e0, e1, min_x_, min_y_, max_x_, max_y_)) {
     p.status = PredictionStatus::kOutsideImage;
-    return;
+    return p;
   }
   p.status = PredictionStatus::kWithoutDepth;
   p.segment_start = e0.cast<float>();
@@ -413,6 +404,7 @@ void KeypointPredictor::PredictAlongSegment(const Eigen::Vector2d& uv_a, const E
   const double s_near = range_a / q_near.norm(), s_far = range_a / q_far.norm();
   p.scale_min = static_cast<float>(std::min(s_near, s_far));
   p.scale_max = static_cast<float>(std::max(s_near, s_far));
+  return p;
 }
 
 float ReferenceKeypointSize(const std::vector<KeypointInfo>& keypoints) {
@@ -470,16 +462,43 @@ std::vector<KeypointInfo> ToIdealKeypointInfos(const std::vector<cv::KeyPoint>& 
 void PredictKeypoints(const KeypointPredictor& predictor,
                       const std::vector<KeypointInfo>& keypoints,
                       const std::vector<float>& depths_m, std::vector<KeypointPrediction>* out) {
-  IMUMATCH_CHECK(depths_m.empty() || depths_m.size() == keypoints.size(),
-                 depths_m.size() << " depths for " << keypoints.size() << " keypoints");
-  out->resize(keypoints.size());
+  PredictKeypointsInRanges(predictor, keypoints, depths_m, {}, out);
+}
+
+int PredictKeypointsInRanges(const KeypointPredictor& predictor,
+                             const std::vector<KeypointInfo>& keypoints,
+                             const std::vector<float>& depths_m,
+                             const std::vector<InverseDepthRange>& ranges,
+                             std::vector<KeypointPrediction>* predictions) {
+  IMUMATCH_CHECK(predictions != nullptr, "PredictKeypointsInRanges needs predictions");
+  const size_t n = keypoints.size();
+  IMUMATCH_CHECK(depths_m.empty() || depths_m.size() == n,
+                 depths_m.size() << " depths for " << n << " keypoints");
+  IMUMATCH_CHECK(ranges.empty() || ranges.size() == n,
+                 ranges.size() << " inverse-depth ranges for " << n << " keypoints");
+  predictions->resize(n);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const float reference = ReferenceKeypointSize(keypoints);
-  for (size_t i = 0; i < keypoints.size(); ++i) {
+  const PredictionOptions& po = predictor.options();
+  int in_range = 0;
+  for (size_t i = 0; i < n; ++i) {
     const KeypointInfo& k = keypoints[i];
-    (*out)[i] = predictor.Predict(Eigen::Vector2d(k.x, k.y), depths_m.empty() ? nan : depths_m[i],
-                                  KeypointSigmaScale(predictor.options(), k, reference));
+    const Eigen::Vector2d uv(k.x, k.y);
+    const float depth = depths_m.empty() ? nan : depths_m[i];
+    const double sigma_scale = KeypointSigmaScale(po, k, reference);
+    KeypointPrediction& p = (*predictions)[i];
+    if (!ranges.empty() && ranges[i].valid() && po.predict_without_depth &&
+        !po.IsUsableDepth(depth)) {
+      p = predictor.PredictInInverseDepthRange(uv, ranges[i].rho_far, ranges[i].rho_near,
+                                               sigma_scale);
+      if (p.status == PredictionStatus::kWithoutDepth) {
+        ++in_range;
+        continue;
+      }
+    }
+    p = predictor.Predict(uv, depth, sigma_scale);
   }
+  return in_range;
 }
 
 std::vector<KeypointPrediction> PredictKeypoints(const PinholeCamera& camera,

@@ -233,14 +233,18 @@ class KeypointPredictor {
   const PredictionOptions& options() const { return options_; }
   // The same predictor with the segments' near end at min_depth (> 0, < segment_max_depth).
   KeypointPredictor WithSegmentMinDepth(double min_depth) const;
+  // The same predictor with the segments' near end where PredictKeypointsInScene put it (this one
+  // when it did not move it).
+  KeypointPredictor WithSceneNearEnd(const SceneNearDepth& scene) const {
+    return scene.moved ? WithSegmentMinDepth(scene.segment_min_depth_m) : *this;
+  }
 
  private:
   void Init(const CameraMotion& motion);
-  // The prediction without depth along the inverse depths [rho_lo, rho_hi] into p (default
-  // constructed); rx = R x_a, range_a = |x_a|, the keypoint noise of A as Predict computes them.
-  void PredictAlongSegment(const Eigen::Vector2d& uv_a, const Eigen::Vector3d& rx, double range_a,
-                           const Eigen::Matrix2d& pixel_cov_a, double pixel_var, double rho_lo,
-                           double rho_hi, KeypointPrediction& p) const;
+  // Predict, with the segment of a keypoint without depth (whatever predict_without_depth says)
+  // spanning the inverse depths [rho_lo, rho_hi].
+  KeypointPrediction PredictWithSegment(const Eigen::Vector2d& uv_a, double depth_m,
+                                        double sigma_scale, double rho_lo, double rho_hi) const;
   Eigen::Vector2d PinholeProject(const Eigen::Vector3d& q) const;
   // Isotropic image-pixel variance -> covariance in ideal pixels at the ideal position uv.
   Eigen::Matrix2d PixelNoise(const Eigen::Vector2d& uv, double pixel_variance) const;
@@ -291,6 +295,24 @@ std::vector<KeypointPrediction> PredictKeypoints(const PixelUndistorter& undisto
                                                  const std::vector<KeypointInfo>& keypoints,
                                                  const std::vector<float>& depths_m,
                                                  const PredictionOptions& options);
+
+// An inverse-depth interval (1/m); NaN ends: none. (NeighbourInverseDepthRanges,
+// neighbour_depth.h, finds them from a first pass's matches.)
+struct InverseDepthRange {
+  double rho_far = std::numeric_limits<double>::quiet_NaN();
+  double rho_near = std::numeric_limits<double>::quiet_NaN();
+  bool valid() const { return rho_far <= rho_near; }
+};
+
+// PredictKeypoints, except that a keypoint without a usable depth and with a valid range is
+// predicted along it (KeypointPredictor::PredictInInverseDepthRange), unless that leaves it no
+// window (then as PredictKeypoints). Each keypoint is predicted once. Returns how many were
+// predicted along their range. ranges: one per keypoint, or empty (= PredictKeypoints).
+int PredictKeypointsInRanges(const KeypointPredictor& predictor,
+                             const std::vector<KeypointInfo>& keypoints,
+                             const std::vector<float>& depths_m,
+                             const std::vector<InverseDepthRange>& ranges,
+                             std::vector<KeypointPrediction>* predictions);
 
 // Depth (metres) at sub-pixel position (x, y) of a depth image (image pixels, not ideal ones):
 // CV_16U raw (divided by depth_scale, 0 = no reading) or CV_32F metres (0 / NaN / negative = no
