@@ -62,6 +62,7 @@ struct CommonArgs {
   bool fixed_gyro_bias = false;
   bool no_patch_look = false;
   bool no_neighbour_depth = false;
+  bool monocular = false;
   double guided_ratio = -1.0;           // < 0: --ratio
   double orientation_tolerance = -1.0;  // < 0: GuidedMatcherOptions default
   double still_s = 1.0;
@@ -133,6 +134,9 @@ void AddCommonOptions(CLI::App* cmd, CommonArgs& a) {
   cmd->add_flag("--no-neighbour-depth", a.no_neighbour_depth,
                 "guided, second pass: search keypoints without depth along their whole segment, "
                 "not along the inverse depths their matched neighbours show");
+  cmd->add_flag("--monocular", a.monocular,
+                "guided: predict without depth (along epipolar segments) also where frame A has a "
+                "depth image, which then only judges the matches");
   cmd->add_flag("--single-pass", a.single_pass,
                 "guided: match once with the IMU's windows (no second pass with the motion fitted "
                 "to the first pass's matches)");
@@ -187,6 +191,7 @@ EvaluationOptions MakeOptions(const CommonArgs& a) {
   o.gyro_bias_from_matches = !a.fixed_gyro_bias;
   o.patch_second_look = !a.no_patch_look;
   o.neighbour_depth.enabled = !a.no_neighbour_depth;
+  o.monocular = a.monocular;
   if (a.orientation_tolerance >= 0.0) o.guided.orientation_tolerance_deg = a.orientation_tolerance;
   if (a.sigma_scaling == "none") {
     o.prediction.sigma_scaling = KeypointSigmaScaling::kNone;
@@ -223,6 +228,9 @@ void Finish(const EvaluationResult& result, ReportContext& context, const Common
   context.config.push_back({"second look by the patch", o.patch_second_look ? "on" : "off"});
   context.config.push_back(
       {"segments from the neighbours' depths", o.neighbour_depth.enabled ? "on" : "off"});
+  if (o.monocular) {
+    context.config.push_back({"prediction", "monocular (depth images only judge the matches)"});
+  }
   for (const std::string& w : result.warnings) std::cerr << "imumatch: warning: " << w << "\n";
   std::cout << MarkdownReport(result, context) << std::flush;
   const auto files = WriteEvaluationOutputs(a.out, result, context);

@@ -28,6 +28,7 @@ struct TrackArgs {
   bool hybrid = false;
   bool no_second_pass = false;
   bool no_neighbour_depth = false;
+  bool monocular = false;
   bool fixed_segments = false;
   double still_s = 0.5;
   size_t first = 0;
@@ -47,6 +48,7 @@ void RunTrackCommand(const TrackArgs& a) {
   o.front_end.hybrid = a.hybrid;
   o.front_end.second_pass = !a.no_second_pass;
   o.front_end.neighbour_depth.enabled = !a.no_neighbour_depth;
+  o.monocular = a.monocular;
   o.front_end.prediction.scene_near.enabled = !a.fixed_segments;
   o.front_end.still_s = a.still_s;
   o.first_frame = a.first;
@@ -87,7 +89,8 @@ void RunTrackCommand(const TrackArgs& a) {
        {"detector", a.detector + ", " + std::to_string(a.max_keypoints) + " keypoints"},
        {"matcher", std::string(a.hybrid ? "hybrid (IMU-seeded KLT + guided)" : "guided") +
                        (a.no_second_pass ? ", one pass" : ", two passes") +
-                       (a.fixed_segments ? ", fixed segments" : "")},
+                       (a.fixed_segments ? ", fixed segments" : "") +
+                       (a.monocular ? ", monocular (depth images only judge)" : "")},
        {"ground truth",
         result.has_truth ? "judged afterwards, never given to the front end" : "none"}});
   std::cout << report << std::flush;
@@ -121,6 +124,9 @@ void AddTrackCommand(CLI::App& app) {
   cmd->add_flag("--no-neighbour-depth", a->no_neighbour_depth,
                 "second pass: search keypoints without depth along their whole segment, not along "
                 "the inverse depths their matched neighbours show");
+  cmd->add_flag("--monocular", a->monocular,
+                "give the front end no depth images (a monocular camera); where the dataset has "
+                "them they only judge the matches");
   cmd->add_flag("--fixed-segments", a->fixed_segments,
                 "keypoints without depth: epipolar segments from 0.1 m, not from the nearest "
                 "depth a pilot of matches shows");

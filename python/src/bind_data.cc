@@ -72,7 +72,7 @@ py::object Evaluate(EvalSource source, const std::vector<std::string>& detectors
                     const std::vector<std::string>& methods, size_t max_pairs, int step,
                     double interval_s, const std::string& motion_source, int max_keypoints,
                     std::optional<double> threshold_px, bool refine, bool second_pass,
-                    uint64_t seed, bool details) {
+                    bool monocular, uint64_t seed, bool details) {
   EvaluationOptions o;
   o.detectors = Detectors(detectors);
   o.methods = Methods(methods);
@@ -80,6 +80,7 @@ py::object Evaluate(EvalSource source, const std::vector<std::string>& detectors
   o.motion_source = ParseMotionSource(motion_source);
   o.refine_subpixel = refine;
   o.second_pass = second_pass;
+  o.monocular = monocular;
   o.seed = seed;
   std::vector<std::string> notes;
   if (o.motion_source == MotionSource::kImu && source.dataset.imu.empty()) {
@@ -306,7 +307,8 @@ truth is exact. Rendering costs ~0.1 s per 640 x 480 frame.)");
       [](const py::object& dataset, const std::vector<std::string>& detectors,
          const std::vector<std::string>& methods, size_t max_pairs, int step, double interval_s,
          const std::string& motion_source, int max_keypoints, std::optional<double> threshold_px,
-         bool refine, bool second_pass, uint64_t seed, bool details, const std::string& imu_model) {
+         bool refine, bool second_pass, bool monocular, uint64_t seed, bool details,
+         const std::string& imu_model) {
         EvalSource source;
         if (py::isinstance<SyntheticSequence>(dataset)) {
           source = MakeSyntheticSource(dataset.cast<const SyntheticSequence&>(), "");
@@ -319,8 +321,8 @@ truth is exact. Rendering costs ~0.1 s per 640 x 480 frame.)");
           source = MakeDiskSource(LoadDatasetOrPosePair(dataset.cast<std::string>(), dopts));
         }
         return Evaluate(std::move(source), detectors, methods, max_pairs, step, interval_s,
-                        motion_source, max_keypoints, threshold_px, refine, second_pass, seed,
-                        details);
+                        motion_source, max_keypoints, threshold_px, refine, second_pass, monocular,
+                        seed, details);
       },
       py::arg("dataset"),
       py::arg("detectors") =
@@ -329,7 +331,8 @@ truth is exact. Rendering costs ~0.1 s per 640 x 480 frame.)");
       py::arg("max_pairs") = 0, py::arg("step") = 1, py::arg("interval_s") = 0.0,
       py::arg("motion_source") = "imu", py::arg("max_keypoints") = 1000,
       py::arg("threshold_px") = py::none(), py::arg("refine") = true, py::arg("second_pass") = true,
-      py::arg("seed") = 42, py::arg("details") = false, py::arg("imu_model") = "euroc",
+      py::arg("monocular") = false, py::arg("seed") = 42, py::arg("details") = false,
+      py::arg("imu_model") = "euroc",
       R"(Compares IMU-guided and brute-force matching on a dataset (a path, a Dataset or a
 SyntheticSequence), judged by its ground truth, as `imumatch eval` does. Returns the summary: one
 dict per case, detector and method (matches, correct, false, precision, recall, window_recall,
@@ -337,7 +340,8 @@ times in ms, threshold_px). details=True returns {'rows', 'threshold', 'notes', 
 'bf_correct_fate', ...}; bf_correct_fate: per prediction method, summed over the pairs, what it
 made of brute force's correct matches (kept, matched_wrong, not matched by reason) and the
 correct matches it gained where brute force had none.
-second_pass=False: the guided method matches once, in the IMU's windows (`--single-pass`).)");
+second_pass=False: the guided method matches once, in the IMU's windows (`--single-pass`).
+monocular=True: predicted without depth, the depth images only judge (`--monocular`).)");
 }
 
 }  // namespace imumatch::python

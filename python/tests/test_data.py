@@ -98,3 +98,20 @@ def test_the_second_pass_finds_more_on_the_seed_pair():
     assert rows[False]["bf"]["correct"] == rows[True]["bf"]["correct"]
     assert two["correct"] > 1.03 * one["correct"]
     assert two["precision"] >= one["precision"]
+
+
+def test_a_monocular_evaluation_predicts_without_depth_and_judges_with_it():
+    # The synthetic room (exact depth and poses): every keypoint is predicted along its epipolar
+    # segment, as for a camera without depth, and the depth images judge the matches exactly.
+    seq = imumatch.make_synthetic_sequence("front1m", frame_times_s=[1.0, 1.033, 1.066])
+    rows = {}
+    for monocular in (False, True):
+        out = imumatch.evaluate(seq, detectors=["orb"], methods=["bf", "guided"],
+                                monocular=monocular)
+        rows[monocular] = {r["method"]: r for r in out}
+    rgbd, mono = rows[False]["guided"], rows[True]["guided"]
+    assert rows[False]["bf"]["correct"] == rows[True]["bf"]["correct"]
+    assert mono["correct"] != rgbd["correct"]  # it did predict otherwise
+    assert mono["window_recall"] >= 0.99
+    assert mono["correct"] >= rows[True]["bf"]["correct"]
+    assert mono["precision"] >= rows[True]["bf"]["precision"]

@@ -198,6 +198,11 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
                            "predicted along epipolar segments and judged by epipolar distance" +
                            epipolar_caveat);
   }
+  if (options.monocular && frames_with_depth > 0) {
+    result.notes.push_back(name +
+                           ": monocular: every keypoint is predicted along its epipolar segment; "
+                           "the depth images only judge the matches");
+  }
   ImuBiasEstimate bias;
   if (options.motion_source == MotionSource::kImu) {
     bias = EstimateImuBias(dataset, options.still_init_s);

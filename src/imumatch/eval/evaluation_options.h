@@ -78,6 +78,10 @@ struct EvaluationOptions {
   GyroBiasFilterOptions gyro_bias_filter;
 
   PredictionOptions prediction;
+  // Predict as a camera without depth would (every keypoint along its epipolar segment), also
+  // where frame A has a depth image: that image then only judges the matches. Measures the
+  // monocular path against the exact judge of depth.
+  bool monocular = false;
   GuidedMatcherOptions guided;
   // Guided methods: refine each match's position in B to sub-pixel accuracy against A's patch
   // warped by the IMU's prediction (RefineMatches); the judge then judges the refined position.

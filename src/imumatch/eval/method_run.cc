@@ -80,8 +80,8 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
   // pair (frame B's), so that is what the prediction stage is charged.
   auto t0 = Clock::now();
   const cv::Mat& depth_a = image_a.depth;
-  std::vector<float> depths;
-  if (!depth_a.empty()) {
+  std::vector<float> depths;  // empty: predicted without depth
+  if (!depth_a.empty() && !options.monocular) {
     depths = SampleDepths(depth_a, camera.depth_scale, fa.keypoints, popts.depth_sampling);
   }
   const KeypointPredictor predictor(undistorter, motion, popts);

@@ -75,7 +75,7 @@ TrackRunResult RunTrack(const EvalSource& source, const TrackRunOptions& options
       FrontEndFrame in;
       in.t_ns = fr.t_ns;
       in.image = images.image;
-      in.depth = images.depth;
+      if (!options.monocular) in.depth = images.depth;
       try {
         rec.result = fe.Process(in);
       } catch (const InvalidArgument& e) {

@@ -18,6 +18,8 @@ namespace imumatch {
 // afterwards at fixed thresholds and the estimated trajectory's relative pose error is computed.
 struct TrackRunOptions {
   FrontEndOptions front_end;
+  // The front end is given no depth images (a monocular camera's run); they still judge.
+  bool monocular = false;
   size_t first_frame = 0;
   size_t max_frames = 0;  // 0 = all
   std::vector<double> thresholds_px = {1.0, 3.0, 8.0};
