@@ -25,6 +25,9 @@ std::vector<double> MatchedInverseDepths(const KeypointPredictor& predictor,
   IMUMATCH_CHECK(depths_m.empty() || depths_m.size() == n,
                  depths_m.size() << " depths for " << n << " keypoints of A");
   std::vector<double> rho(n, std::numeric_limits<double>::quiet_NaN());
+  // A partner beyond the rotation-only point: at infinity within noise, unless the translation's
+  // sign is open.
+  const bool sign_open = predictor.TranslationSignOpen();
   for (const Match& m : matches) {
     IMUMATCH_CHECK(m.query_idx >= 0 && static_cast<size_t>(m.query_idx) < n,
                    "match query " << m.query_idx << " outside the " << n << " keypoints of A");
@@ -40,7 +43,7 @@ std::vector<double> MatchedInverseDepths(const KeypointPredictor& predictor,
     const KeypointInfo& a = keypoints_a[i];
     const KeypointInfo& b = keypoints_b[static_cast<size_t>(m.train_idx)];
     const double r = predictor.InverseDepthOf({a.x, a.y}, {b.x, b.y});
-    if (std::isfinite(r)) rho[i] = std::max(r, 0.0);
+    if (std::isfinite(r)) rho[i] = sign_open ? r : std::max(r, 0.0);
   }
   return rho;
 }
@@ -101,8 +104,10 @@ std::vector<InverseDepthRange> NeighbourInverseDepthRanges(
       }
     }
     if (neighbours < options.min_neighbours) continue;
-    ranges[i].rho_far = range_lo / options.range_factor;
-    ranges[i].rho_near = range_hi * options.range_factor;
+    // Widened away from zero on both sides (a negative end moves further below zero).
+    const double f = options.range_factor;
+    ranges[i].rho_far = range_lo >= 0.0 ? range_lo / f : range_lo * f;
+    ranges[i].rho_near = range_hi >= 0.0 ? range_hi * f : range_hi / f;
   }
   return ranges;
 }

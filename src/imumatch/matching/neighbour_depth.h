@@ -28,16 +28,23 @@ struct NeighbourDepthOptions {
   double cell_px = 24.0;
   int min_neighbours = 3;
   // The range [rho_min / range_factor, rho_max * range_factor] of the neighbours' inverse depths
-  // (depth from half the nearest one's to twice the farthest one's for range_factor 2).
+  // (depth from half the nearest one's to twice the farthest one's for range_factor 2); a
+  // negative end (see MatchedInverseDepths) is moved away from zero as well (times range_factor).
   double range_factor = 2.0;
   void Check() const;  // throws InvalidArgument
 };
 
 // The inverse depths (1/m) that matches measure for their keypoints of A: 1 / depth where
 // depths_m (one per keypoint of A, or empty) holds a usable depth (predictor.options()), else
-// predictor.InverseDepthOf the keypoint and its partner (negative values, at infinity within noise,
-// as 0). NaN for the keypoints without a match or whose partner is not a keypoint of B (a track:
-// train_idx < 0). Keypoints in ideal pixels; the predictor holds the motion the matches fit.
+// predictor.InverseDepthOf the keypoint and its partner, in the units of the predictor's
+// translation: where the partner lies along its epipolar line. That value is negative when the
+// partner lies beyond the rotation-only point: at infinity within the keypoints' noise, or, when
+// the fit saw no depth (epipolar distances do not observe the translation's length, nor its sign
+// when the length is within its uncertainty of zero: hovering, a slow take-off), because the
+// translation points the other way; it is kept, so that the range of such neighbours still holds
+// the partners. NaN for the keypoints without a match or whose partner is not a keypoint of B (a
+// track: train_idx < 0). Keypoints in ideal pixels; the predictor holds the motion the matches
+// fit.
 std::vector<double> MatchedInverseDepths(const KeypointPredictor& predictor,
                                          const std::vector<KeypointInfo>& keypoints_a,
                                          const std::vector<float>& depths_m,

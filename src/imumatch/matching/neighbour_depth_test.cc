@@ -75,15 +75,25 @@ TEST(NeighbourDepthTest, MatchedInverseDepthsFromTheDepthOrTheEpipolarLine) {
   EXPECT_DOUBLE_EQ(rho[3], 1.0 / 2.5);
   EXPECT_TRUE(std::isnan(rho[4]));
 
-  // A partner beyond infinity along the line (behind the point at infinity): 0, not negative.
+  // A partner beyond infinity along the line (behind the point at infinity), where the translation
+  // pointing the other way would put it at half its inverse depth: 0 (noise) when the motion's
+  // translation is known, that negative inverse depth when its sign is open.
   std::vector<KeypointInfo> b = s.kps_b;
-  const Eigen::Vector2d inf = predictor.RotationOnly({s.kps_a[0].x, s.kps_a[0].y});
-  const Eigen::Vector2d near_end(s.kps_b[0].x, s.kps_b[0].y);
-  const Eigen::Vector2d beyond = inf + 0.5 * (inf - near_end);
-  b[0].x = static_cast<float>(beyond.x());
-  b[0].y = static_cast<float>(beyond.y());
+  const double rho_beyond = -0.5 / s.depths[0];
+  const Eigen::Vector3d bearing = s.camera.Unproject({s.kps_a[0].x, s.kps_a[0].y}, 1.0);
+  const auto beyond = s.camera.Project(kNeighbourMotion.rotation * bearing +
+                                       rho_beyond * kNeighbourMotion.translation);
+  ASSERT_TRUE(beyond.has_value());
+  b[0].x = static_cast<float>(beyond->x());
+  b[0].y = static_cast<float>(beyond->y());
   rho = MatchedInverseDepths(predictor, s.kps_a, {}, {matches[0]}, b);
   EXPECT_EQ(rho[0], 0.0);
+  CameraMotion open = ExactMotion();  // 15 cm known to 10 cm per axis
+  open.covariance.bottomRightCorner<3, 3>() = 0.01 * Eigen::Matrix3d::Identity();
+  const KeypointPredictor open_predictor(s.camera, open, PredictionOptions());
+  ASSERT_TRUE(open_predictor.TranslationSignOpen());
+  rho = MatchedInverseDepths(open_predictor, s.kps_a, {}, {matches[0]}, b);
+  EXPECT_NEAR(rho[0], rho_beyond, 2e-3);
 
   std::vector<Match> bad(1);
   bad[0].query_idx = 6;
@@ -118,12 +128,39 @@ TEST(NeighbourDepthTest, InverseDepthRangeEndsWhereThePointsAtThoseDepthsProject
   EXPECT_NEAR(p.scale_min, std::min(s2, s8), 1e-5);
   EXPECT_NEAR(p.scale_max, std::max(s2, s8), 1e-5);
 
-  // Cut to the configured segment [0.1 m, inf): a range reaching beyond infinity ends there.
+  // Cut to the configured segment [0.1 m, inf) when the translation is known (its sign is not
+  // open): a range reaching beyond infinity ends there.
   const KeypointPrediction whole = predictor.Predict(uv, std::nan(""));
   const KeypointPrediction far = predictor.PredictInInverseDepthRange(uv, -1.0, 1.0 / 8.0);
   EXPECT_NEAR(far.segment_end.x(), whole.segment_end.x(), 1e-4);
   EXPECT_NEAR(far.segment_end.y(), whole.segment_end.y(), 1e-4);
   EXPECT_NEAR(far.segment_start.x(), at(8.0).x(), 1e-3);
+  // With the translation's sign open, a range reaching below zero is kept there, beyond the
+  // rotation-only point, down to the configured segment mirrored (-1 / 0.1 m).
+  CameraMotion open = ExactMotion();
+  open.covariance.bottomRightCorner<3, 3>() = 0.01 * Eigen::Matrix3d::Identity();
+  const KeypointPredictor open_predictor(s.camera, open, po);
+  const auto at_rho = [&](double rho) {
+    return *s.camera.Project(kNeighbourMotion.rotation * s.camera.Unproject(uv, 1.0) +
+                             rho * kNeighbourMotion.translation);
+  };
+  for (const auto& [lo, hi] : {std::pair{-0.5, -0.125}, std::pair{-0.25, 0.5}}) {
+    const KeypointPrediction q = open_predictor.PredictInInverseDepthRange(uv, lo, hi);
+    ASSERT_EQ(q.status, PredictionStatus::kWithoutDepth);
+    EXPECT_NEAR(q.segment_start.x(), at_rho(hi).x(), 1e-3) << lo;
+    EXPECT_NEAR(q.segment_start.y(), at_rho(hi).y(), 1e-3) << lo;
+    EXPECT_NEAR(q.segment_end.x(), at_rho(lo).x(), 1e-3) << lo;
+    EXPECT_NEAR(q.segment_end.y(), at_rho(lo).y(), 1e-3) << lo;
+  }
+  PredictionOptions near2 = po;  // configured segment [2 m, inf): the floor is -0.5
+  near2.segment_min_depth = 2.0;
+  const KeypointPrediction deep =
+      KeypointPredictor(s.camera, open, near2).PredictInInverseDepthRange(uv, -5.0, -0.25);
+  ASSERT_EQ(deep.status, PredictionStatus::kWithoutDepth);
+  ASSERT_TRUE(s.camera.IsInside(at_rho(-0.5)));
+  EXPECT_NEAR(deep.segment_start.x(), at_rho(-0.25).x(), 1e-3);
+  EXPECT_NEAR(deep.segment_end.x(), at_rho(-0.5).x(), 1e-3);
+  EXPECT_NEAR(deep.segment_end.y(), at_rho(-0.5).y(), 1e-3);
   // A range that does not meet the configured segment, or NaN: the configured segment.
   for (const auto& [lo, hi] : {std::pair{20.0, 30.0}, std::pair{std::nan(""), 1.0}}) {
     const KeypointPrediction q = predictor.PredictInInverseDepthRange(uv, lo, hi);
@@ -216,6 +253,21 @@ TEST(NeighbourDepthTest, AKeypointWithTooFewNeighboursKeepsItsSegment) {
   EXPECT_EQ(PredictKeypointsInRanges(predictor, s.kps_a, {}, ranges, &predictions), 3);
   for (size_t i = 0; i < 3; ++i) {
     EXPECT_LT(SegmentLength(predictions[i]), SegmentLength(before[i]));
+  }
+  // Negative inverse depths (partners beyond the rotation-only point) widen away from zero too:
+  // [-0.5, -0.25] -> [-1.0, -0.125], [-0.25, 0.5] -> [-0.5, 1.0].
+  {
+    options.min_neighbours = 2;
+    std::vector<KeypointInfo> pair = {s.kps_a[0], s.kps_a[0]};
+    pair[1].x += 1.0f;
+    std::vector<InverseDepthRange> r =
+        NeighbourInverseDepthRanges(pair, std::vector<double>{-0.5, -0.25}, options);
+    EXPECT_DOUBLE_EQ(r[0].rho_far, -1.0);
+    EXPECT_DOUBLE_EQ(r[0].rho_near, -0.125);
+    r = NeighbourInverseDepthRanges(pair, std::vector<double>{-0.25, 0.5}, options);
+    EXPECT_DOUBLE_EQ(r[1].rho_far, -0.5);
+    EXPECT_DOUBLE_EQ(r[1].rho_near, 1.0);
+    options.min_neighbours = 1;
   }
   // A keypoint with a usable depth is predicted from it, whatever its range.
   const std::vector<float> depths = {2.0f, std::nanf(""), 0.0f};

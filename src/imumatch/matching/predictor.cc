@@ -154,6 +154,8 @@ void KeypointPredictor::Init(const CameraMotion& motion) {
   motion_cov_ = motion.covariance;
   has_motion_cov_ = !motion_cov_.isZero(0.0);
   chi2_ = options_.GateChiSquare();
+  const double length2 = t_.squaredNorm();
+  sign_open_ = !(length2 > chi2_ * t_.dot(motion_cov_.bottomRightCorner<3, 3>() * t_) / length2);
 }
 
 Eigen::Matrix2d KeypointPredictor::PixelNoise(const Eigen::Vector2d& uv,
@@ -288,8 +290,11 @@ KeypointPrediction KeypointPredictor::PredictInInverseDepthRange(const Eigen::Ve
                                                                  double rho_far, double rho_near,
                                                                  double sigma_scale) const {
   double lo = 1.0 / options_.segment_max_depth, hi = 1.0 / options_.segment_min_depth;
-  if (rho_far <= rho_near && rho_near >= lo && rho_far <= hi) {  // overlaps (not NaN)
-    lo = std::max(rho_far, lo);
+  // Below zero when the translation's sign is open: down to the configured segment mirrored
+  // beyond the rotation-only point.
+  const double floor = sign_open_ ? std::min(lo, -hi) : lo;
+  if (rho_far <= rho_near && rho_near >= floor && rho_far <= hi) {  // overlaps (not NaN)
+    lo = rho_far < lo ? std::max(rho_far, floor) : rho_far;
     hi = std::min(rho_near, hi);
   }
   return PredictWithSegment(uv_a, std::numeric_limits<double>::quiet_NaN(), sigma_scale, lo, hi);
@@ -369,9 +374,12 @@ KeypointPrediction KeypointPredictor::PredictWithSegment(const Eigen::Vector2d& 
   double r = options_.fixed_half_size;
   if (options_.window_mode == WindowMode::kUncertainty) {
     // The capsule holds the gate ellipse of each end moved along the segment: its radius is the
-    // ellipses' extent across the segment, sqrt(chi2 n^T C n), and each end moves out by the
-    // extent along it, sqrt(chi2 d^T C d). An error of the translation's length (the IMU's scale,
-    // which a fit to the images leaves open) moves a point along its epipolar line, not across.
+    // ellipses' extent across the segment, sqrt(chi2 n^T C n), and along it the segment spans
+    // both ellipses, each reaching sqrt(chi2 d^T C d) either way from its end. An error of the
+    // translation's length (the IMU's scale, which a fit to the images leaves open) moves a
+    // point along its epipolar line, not across; when that error is as large as the translation
+    // itself (hovering, a slow take-off), the near end's ellipse reaches past the far end: the
+    // translation may point the other way, and the partner lie beyond the rotation-only point.
     double across = std::max(l_near, l_far), out_near = 0.0, out_far = 0.0;
     const Eigen::Vector2d along = e1 - e0;
     const double length = along.norm();
@@ -385,8 +393,12 @@ KeypointPrediction KeypointPredictor::PredictWithSegment(const Eigen::Vector2d& 
           std::min(std::sqrt(chi2_ * std::max(d.dot(c_near * d), 0.0)), options_.max_half_size);
       out_far =
           std::min(std::sqrt(chi2_ * std::max(d.dot(c_far * d), 0.0)), options_.max_half_size);
-      e0 -= out_near * d;
-      e1 += out_far * d;
+      // Along d from e0 (the near end at 0, the far end at length): the union of the ellipses'
+      // spans [-out_near, out_near] and [length - out_far, length + out_far].
+      const double lo = std::min(-out_near, length - out_far);
+      const double hi = std::max(out_near, length + out_far);
+      e1 = e0 + hi * d;
+      e0 += lo * d;
       p.segment_start = e0.cast<float>();
       p.segment_end = e1.cast<float>();
     }

@@ -207,8 +207,12 @@ class KeypointPredictor {
   // A keypoint without depth searched along the part of its epipolar segment between the inverse
   // depths rho_far <= rho_near (1/m; 0 is infinity) that lies within the configured segment
   // [1 / segment_max_depth, 1 / segment_min_depth]: for a depth range the scene around the
-  // keypoint shows (PredictKeypointsInRanges). A range outside the configured one (or NaN):
-  // the configured segment, as Predict without depth. Runs even when predict_without_depth is off.
+  // keypoint shows (PredictKeypointsInRanges). Inverse depths are in the units of the motion's
+  // translation. When its sign is open (TranslationSignOpen), a range may reach below zero,
+  // beyond the rotation-only point, where the matches of a motion fitted without depth then put
+  // partners: down to the configured segment mirrored beyond that point (-1 / segment_min_depth).
+  // A range outside these bounds (or NaN): the configured segment, as Predict without depth. Runs
+  // even when predict_without_depth is off.
   KeypointPrediction PredictInInverseDepthRange(const Eigen::Vector2d& uv_a, double rho_far,
                                                 double rho_near, double sigma_scale = 1.0) const;
 
@@ -222,6 +226,11 @@ class KeypointPredictor {
   // (R x_a + rho t) x x_b = 0, so uv_b off the epipolar line counts only by its component along
   // it. 0 or negative: at infinity or beyond it (within noise); NaN without translation.
   double InverseDepthOf(const Eigen::Vector2d& uv_a, const Eigen::Vector2d& uv_b) const;
+  // True when the motion's translation may point the other way: its length lies within the
+  // windows' gate (sqrt(chi2) sigmas, options.gate_probability) of zero, sigma being the
+  // covariance's extent along the translation (a fit without depth leaves it the IMU's). Partners
+  // can then lie beyond the rotation-only point (InverseDepthOf < 0) by more than noise.
+  bool TranslationSignOpen() const { return sign_open_; }
 
   // 2x2 pixel covariance of the projection of q = R x + rho t (x = [x, y, 1] the undistorted
   // bearing in A, rho the inverse depth), see the .cc for the Jacobians.
@@ -261,6 +270,7 @@ class KeypointPredictor {
   Eigen::Vector3d r_col0_fx_, r_col1_fy_;  // R e1 / fx, R e2 / fy: dq/du_a, dq/dv_a
   Eigen::Matrix<double, 6, 6> motion_cov_;
   bool has_motion_cov_ = false;
+  bool sign_open_ = false;
   double chi2_ = 9.21;
 };
 

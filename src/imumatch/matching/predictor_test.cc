@@ -315,6 +315,89 @@ TEST(PredictorTest, CapsuleIsThinAcrossAndLongAlongWhenOnlyTheLengthIsUncertain)
   EXPECT_LE(moved_out, 2.0 * 64.0 + 1e-3);
 }
 
+// A translation whose length is uncertain by more than the length itself (a hovering or slowly
+// climbing camera, whose velocity is known to a few cm/s) may point the other way: a point then
+// moves beyond the rotation-only point, the far end of its segment. The near end's gate ellipse
+// reaches there, and the capsule must hold it. Checked against Monte Carlo draws of the motion
+// and of the depth.
+TEST(PredictorTest, SegmentReachesBeyondTheRotationOnlyPointWhenTheTranslationsSignIsOpen) {
+  const PinholeCamera cam = TestCamera();
+  const Eigen::Vector3d t(0.0, 0.003, 0.0005);  // 3 mm, known to 5 mm along, 0.05 mm across
+  CameraMotion motion = MakeMotion(FromEulerZYX(0.01, 0.0, -0.01), t);
+  const Eigen::Vector3d dir = t.normalized();
+  motion.covariance.topLeftCorner<3, 3>() = 1e-8 * Eigen::Matrix3d::Identity();
+  motion.covariance.bottomRightCorner<3, 3>() =
+      0.005 * 0.005 * dir * dir.transpose() +
+      5e-5 * 5e-5 * (Eigen::Matrix3d::Identity() - dir * dir.transpose());
+  PredictionOptions options;
+  options.keypoint_sigma_px = 0.0;  // motion only
+  options.min_half_size = 0.0;
+  options.segment_min_depth = 0.3;
+  const KeypointPredictor predictor(cam, motion, options);
+  // 3 mm against a gate of sqrt(9.21) x 5 mm: the sign is open.
+  EXPECT_TRUE(predictor.TranslationSignOpen());
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> uu(40, 600), uv(40, 440), urho(1.0 / 30.0, 1.0 / 0.3);
+  std::normal_distribution<double> n01;
+  const Eigen::Matrix<double, 6, 6> l =
+      Eigen::LLT<Eigen::Matrix<double, 6, 6>>(motion.covariance).matrixL();
+  int tested = 0, inside = 0, reversed = 0;
+  for (int k = 0; k < 200; ++k) {
+    const Eigen::Vector2d pix(uu(rng), uv(rng));
+    const KeypointPrediction p = predictor.Predict(pix, std::nan(""));
+    if (p.status != PredictionStatus::kWithoutDepth) continue;
+    for (int s = 0; s < 20; ++s) {
+      Eigen::Matrix<double, 6, 1> z;
+      for (int i = 0; i < 6; ++i) z[i] = n01(rng);
+      const Eigen::Matrix<double, 6, 1> d = l * z;
+      const Eigen::Vector3d t_true = t + d.tail<3>();
+      const Eigen::Vector3d p_b = ExpSO3(d.head<3>()) * (motion.cam_b_from_cam_a.rotation *
+                                                         cam.Unproject(pix, 1.0 / urho(rng))) +
+                                  t_true;
+      const std::optional<Eigen::Vector2d> uv_b = cam.Project(p_b);
+      if (!uv_b || !cam.IsInside(*uv_b)) continue;
+      ++tested;
+      reversed += t_true.dot(t) < 0.0 ? 1 : 0;
+      inside += p.Contains(static_cast<float>(uv_b->x()), static_cast<float>(uv_b->y())) ? 1 : 0;
+    }
+  }
+  ASSERT_GT(tested, 3000);
+  // About a quarter of the draws move the camera the other way (P(N(3, 5) < 0) = 0.27).
+  EXPECT_GT(reversed, tested / 5);
+  EXPECT_GE(static_cast<double>(inside) / tested, 0.99);
+
+  // A length known to 0.5 mm: the sign is not open, and the segment ends at the rotation-only
+  // point (moved out only by the far end's own ellipse: rotation, 1e-4 rad -> 0.15 px).
+  motion.covariance.bottomRightCorner<3, 3>() = 0.0005 * 0.0005 * Eigen::Matrix3d::Identity();
+  const KeypointPredictor known(cam, motion, options);
+  EXPECT_FALSE(known.TranslationSignOpen());
+  const Eigen::Vector2d pix(200.0, 300.0);
+  const KeypointPrediction p = known.Predict(pix, std::nan(""));
+  ASSERT_EQ(p.status, PredictionStatus::kWithoutDepth);
+  EXPECT_LT((p.segment_end.cast<double>() - known.RotationOnly(pix)).norm(), 0.5);
+}
+
+// TranslationSignOpen, by hand: 1 cm known to 5 mm along its direction is within the gate of
+// zero (sqrt(9.21) x 5 mm = 15 mm), 2 cm is not; no translation, or no covariance.
+TEST(PredictorTest, TranslationSignOpenWhenTheLengthIsWithinTheGateOfZero) {
+  const PinholeCamera cam = TestCamera();
+  PredictionOptions options;  // gate 0.99: chi2 9.21
+  const auto open = [&](const Eigen::Vector3d& t, double sigma_along, double sigma_across) {
+    CameraMotion m = MakeMotion(Eigen::Quaterniond::Identity(), t);
+    const Eigen::Vector3d dir = t.norm() > 0.0 ? t.normalized() : Eigen::Vector3d::UnitZ();
+    m.covariance.bottomRightCorner<3, 3>() =
+        sigma_along * sigma_along * dir * dir.transpose() +
+        sigma_across * sigma_across * (Eigen::Matrix3d::Identity() - dir * dir.transpose());
+    return KeypointPredictor(cam, m, options).TranslationSignOpen();
+  };
+  EXPECT_TRUE(open(Eigen::Vector3d(0.0, 0.0, 0.01), 0.005, 0.0));
+  EXPECT_FALSE(open(Eigen::Vector3d(0.0, 0.0, 0.02), 0.005, 0.0));
+  // Only the extent along the translation counts: a wide uncertainty across it does not open it.
+  EXPECT_FALSE(open(Eigen::Vector3d(0.02, 0.0, 0.0), 0.005, 1.0));
+  EXPECT_TRUE(open(Eigen::Vector3d::Zero(), 0.0, 0.0));
+  EXPECT_FALSE(open(Eigen::Vector3d(0.0, 0.001, 0.0), 0.0, 0.0));  // exact: known
+}
+
 TEST(PredictorTest, DistortedLensPredictsInIdealPixels) {
   // Points at random depths seen through the EuRoC lens: the truth is the camera model's own
   // projection. In ideal pixels it lies on the straight epipolar segment; in image pixels the
