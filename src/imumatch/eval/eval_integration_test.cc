@@ -285,20 +285,35 @@ struct FlightRun {
   double threshold_px = 0.0;
 };
 
-FlightRun RunFlight(MotionSource source, bool refine) {
-  DatasetOptions dopt;
-  const EvalSource src = MakeDiskSource(LoadDataset(testing::DataPath("euroc_mh05_flight"), dopt));
+EvalSource FlightSource() {
+  return MakeDiskSource(LoadDataset(testing::DataPath("euroc_mh05_flight"), DatasetOptions()));
+}
+
+// ORB and SIFT, brute force and guided, a fixed seed.
+EvaluationOptions FlightOptions() {
   EvaluationOptions o;
   o.detectors = {DetectorKind::kOrb, DetectorKind::kSift};
   o.methods = {MatchMethod::kBruteForce, MatchMethod::kGuided};
+  o.seed = 42;
+  return o;
+}
+
+// Consecutive pairs (a, a + 1) for a in [first, end).
+std::vector<FramePair> ConsecutivePairs(size_t first, size_t end) {
+  std::vector<FramePair> pairs;
+  for (size_t a = first; a < end; ++a) pairs.push_back({a, a + 1});
+  return pairs;
+}
+
+FlightRun RunFlight(MotionSource source, bool refine) {
+  EvaluationOptions o = FlightOptions();
   o.motion_source = source;
   o.refine_subpixel = refine;
-  o.seed = 42;
-  std::vector<FramePair> pairs;
-  for (size_t a = 0; a < 20; ++a) pairs.push_back({a, a + 1});
-  for (size_t a = 100; a < 120; ++a) pairs.push_back({a, a + 1});
+  std::vector<FramePair> pairs = ConsecutivePairs(0, 20);
+  const std::vector<FramePair> flight = ConsecutivePairs(100, 120);
+  pairs.insert(pairs.end(), flight.begin(), flight.end());
   FlightRun run;
-  run.result = EvaluateSource(src, pairs, o);
+  run.result = EvaluateSource(FlightSource(), pairs, o);
   run.threshold_px = ChooseThreshold(run.result, false, std::nullopt).threshold_px;
   return run;
 }
@@ -346,15 +361,12 @@ TEST(EvalFlightTest, DepthImagesAndTheStillStartAreUsed) {
 // error falls below a third of that within five pairs (to 0.05-0.07 deg: the learnt bias's y
 // component stays 0.008 rad/s from the still start's); without the learning it stays.
 TEST(EvalFlightTest, WithoutAStillStartTheGyroBiasIsLearntFromTheMatches) {
-  DatasetOptions dopt;
-  const EvalSource src = MakeDiskSource(LoadDataset(testing::DataPath("euroc_mh05_flight"), dopt));
-  EvaluationOptions o;
+  const EvalSource src = FlightSource();
+  EvaluationOptions o = FlightOptions();
   o.detectors = {DetectorKind::kOrb};
   o.methods = {MatchMethod::kGuided};
   o.still_init_s = 0.0;
-  o.seed = 42;
-  std::vector<FramePair> pairs;
-  for (size_t a = 100; a < 130; ++a) pairs.push_back({a, a + 1});
+  const std::vector<FramePair> pairs = ConsecutivePairs(100, 130);
   for (const bool learn : {true, false}) {
     SCOPED_TRACE(learn ? "learnt" : "not learnt");
     o.gyro_bias_from_matches = learn;
@@ -460,16 +472,9 @@ TEST(EvalFlightTest, InFlightTheSecondPassShrinksTheWindows) {
 // inverse depths (clamped at infinity) made it worse. The segments now span both ends' gate
 // ellipses, and the neighbours' ranges keep their sign when it is open.
 TEST(EvalFlightTest, MonocularAtTakeOffTheWindowsHoldThePartners) {
-  DatasetOptions dopt;
-  const EvalSource src = MakeDiskSource(LoadDataset(testing::DataPath("euroc_mh05_flight"), dopt));
-  EvaluationOptions o;
-  o.detectors = {DetectorKind::kOrb, DetectorKind::kSift};
-  o.methods = {MatchMethod::kBruteForce, MatchMethod::kGuided};
+  EvaluationOptions o = FlightOptions();
   o.monocular = true;
-  o.seed = 42;
-  std::vector<FramePair> pairs;
-  for (size_t a = 0; a < 20; ++a) pairs.push_back({a, a + 1});
-  const EvaluationResult result = EvaluateSource(src, pairs, o);
+  const EvaluationResult result = EvaluateSource(FlightSource(), ConsecutivePairs(0, 20), o);
   ASSERT_EQ(result.records.size(), 40u);
   const double threshold = ChooseThreshold(result, false, std::nullopt).threshold_px;
   bool note = false;
