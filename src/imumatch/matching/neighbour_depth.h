@@ -38,13 +38,13 @@ struct NeighbourDepthOptions {
 // depths_m (one per keypoint of A, or empty) holds a usable depth (predictor.options()), else
 // predictor.InverseDepthOf the keypoint and its partner, in the units of the predictor's
 // translation: where the partner lies along its epipolar line. That value is negative when the
-// partner lies beyond the rotation-only point: at infinity within the keypoints' noise, or, when
-// the fit saw no depth (epipolar distances do not observe the translation's length, nor its sign
-// when the length is within its uncertainty of zero: hovering, a slow take-off), because the
-// translation points the other way; it is kept, so that the range of such neighbours still holds
-// the partners. NaN for the keypoints without a match or whose partner is not a keypoint of B (a
-// track: train_idx < 0). Keypoints in ideal pixels; the predictor holds the motion the matches
-// fit.
+// partner lies beyond the rotation-only point: at infinity within the keypoints' noise (then 0),
+// or, when predictor.TranslationSignOpen() (epipolar distances observe neither the translation's
+// length nor, when it is within its uncertainty of zero, its sign: hovering, a slow take-off),
+// because the translation points the other way: then it is kept, so that the range of such
+// neighbours still holds the partners. NaN for the keypoints without a match or whose partner is
+// not a keypoint of B (a track: train_idx < 0). Keypoints in ideal pixels; the predictor holds the
+// motion the matches fit.
 std::vector<double> MatchedInverseDepths(const KeypointPredictor& predictor,
                                          const std::vector<KeypointInfo>& keypoints_a,
                                          const std::vector<float>& depths_m,

@@ -294,7 +294,7 @@ KeypointPrediction KeypointPredictor::PredictInInverseDepthRange(const Eigen::Ve
   // beyond the rotation-only point.
   const double floor = sign_open_ ? std::min(lo, -hi) : lo;
   if (rho_far <= rho_near && rho_near >= floor && rho_far <= hi) {  // overlaps (not NaN)
-    lo = rho_far < lo ? std::max(rho_far, floor) : rho_far;
+    lo = std::max(rho_far, floor);
     hi = std::min(rho_near, hi);
   }
   return PredictWithSegment(uv_a, std::numeric_limits<double>::quiet_NaN(), sigma_scale, lo, hi);

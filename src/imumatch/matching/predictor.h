@@ -224,7 +224,8 @@ class KeypointPredictor {
   // The inverse depth rho = 1 / z_a (1/m, z along A's optical axis) at which keypoint uv_a of A
   // would be seen at uv_b in B (both ideal pixels): the least-squares solution of
   // (R x_a + rho t) x x_b = 0, so uv_b off the epipolar line counts only by its component along
-  // it. 0 or negative: at infinity or beyond it (within noise); NaN without translation.
+  // it. 0 or negative: at infinity or beyond it (within noise, unless TranslationSignOpen); NaN
+  // without translation.
   double InverseDepthOf(const Eigen::Vector2d& uv_a, const Eigen::Vector2d& uv_b) const;
   // True when the motion's translation may point the other way: its length lies within the
   // windows' gate (sqrt(chi2) sigmas, options.gate_probability) of zero, sigma being the
