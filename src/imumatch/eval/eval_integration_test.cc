@@ -501,6 +501,38 @@ TEST(EvalFlightTest, MonocularAtTakeOffTheWindowsHoldThePartners) {
   }
 }
 
+// Three frames apart at take-off (frames 21-33, depth from stereo): the nearest keypoints with
+// depth are corners of a beam's outline 0.6 m away that move with the background behind it. Fed
+// to the second pass's fit, they set the translation's length 19.7 mm off on average with a
+// stated sigma under a millimetre, and its windows lost up to 11 % of the pair's correct matches
+// (checked by clearing no depth: window recall 0.885-0.977 in five of the eight runs). The fit
+// now leaves out depth read near an occlusion edge.
+TEST(EvalFlightTest, AtTakeOffTheFitIgnoresDepthReadAcrossOcclusionEdges) {
+  EvaluationOptions o = FlightOptions();
+  o.detectors = {DetectorKind::kOrb, DetectorKind::kFastBrief};
+  std::vector<FramePair> pairs;
+  for (const size_t a : {size_t{21}, size_t{24}, size_t{27}, size_t{30}})
+    pairs.push_back({a, a + 3});
+  const EvaluationResult result = EvaluateSource(FlightSource(), pairs, o);
+  ASSERT_EQ(result.records.size(), 8u);
+  const double threshold = ChooseThreshold(result, false, std::nullopt).threshold_px;
+  double fit_error_m = 0.0;
+  int fits = 0;
+  for (const auto& r : result.records) {
+    EXPECT_GT(r.keypoints_a_with_depth, 0) << r.frame_a;
+    for (const auto& mr : r.runs) {
+      if (mr.method != MatchMethod::kGuided) continue;
+      SCOPED_TRACE(ToString(r.detector) + " frame " + std::to_string(r.frame_a));
+      EXPECT_GE(ComputeWindowRecall(r, mr, threshold).Recall(), 0.99);
+      ASSERT_TRUE(mr.refit.ok) << mr.refit.reason;
+      fit_error_m += mr.refit_translation_error_m;
+      ++fits;
+    }
+  }
+  ASSERT_EQ(fits, 8);
+  EXPECT_LT(fit_error_m / fits, 0.014);  // 8.9 mm now
+}
+
 TEST(EvalFlightTest, GuidedBeatsBruteForceWithAndWithoutDepth) {
   const FlightRun& run = FlightImu();
   const auto split = SplitByDepth(run.result.records);
