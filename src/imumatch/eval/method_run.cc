@@ -134,15 +134,11 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
     // the prediction stage, the search to matching.
     run.first_window_px = MeanWindowHalfSize(predictions);
     t0 = Clock::now();
-    // The fit takes no depth read near an edge of the depth image (MotionRefitOptions::
-    // depth_edges); the predictions keep them.
-    std::vector<float> fit_depths = depths;
-    if (!fit_depths.empty()) {
-      ClearDepthsNearEdges(depth_a, camera.depth_scale, fa.keypoints, options.refit.depth_edges,
-                           &fit_depths);
-    }
-    run.refit = RefitMotion(motion, result.matches, fa.keypoints, fb.keypoints, fit_depths, popts,
-                            undistorter, options.refit);
+    // The fit takes no depth read near an edge of the depth image; the predictions keep them.
+    run.refit =
+        RefitMotion(motion, result.matches, fa.keypoints, fb.keypoints,
+                    FitDepths(depth_a, camera.depth_scale, fa.keypoints, depths, options.refit),
+                    popts, undistorter, options.refit);
     run.second_pass = run.refit.ok          ? SecondPassOutcome::kRan
                       : run.refit.disagrees ? SecondPassOutcome::kFitDisagreed
                                             : SecondPassOutcome::kNoFit;

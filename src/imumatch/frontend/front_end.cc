@@ -368,14 +368,11 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
     // The windows: the motion and covariance RefitMotion finds from the IMU's prior and the first
     // pass's matches when it can; else the pose fit's with the covariance above.
     Rigid3d fitted = result.pose.cam_b_from_cam_a;
-    std::vector<float> fit_depths = prev.depths;
-    if (!fit_depths.empty()) {
-      ClearDepthsNearEdges(prev.depth, camera.depth_scale, prev.features.keypoints,
-                           options_.refit.depth_edges, &fit_depths);
-    }
-    const MotionRefit refit = RefitMotion(result.imu_motion, result.matches_pass1,
-                                          prev.features.keypoints, features.keypoints, fit_depths,
-                                          options_.prediction, undistorter_, options_.refit);
+    const MotionRefit refit = RefitMotion(
+        result.imu_motion, result.matches_pass1, prev.features.keypoints, features.keypoints,
+        FitDepths(prev.depth, camera.depth_scale, prev.features.keypoints, prev.depths,
+                  options_.refit),
+        options_.prediction, undistorter_, options_.refit);
     if (refit.ok) {
       refined = refit.motion;
       fitted = refit.motion.cam_b_from_cam_a;

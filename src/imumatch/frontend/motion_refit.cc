@@ -104,6 +104,17 @@ Eigen::Vector2d PositionInB(const Match& m, const std::vector<cv::KeyPoint>& key
   return Eigen::Vector2d(p.x, p.y);
 }
 
+std::vector<float> FitDepths(const cv::Mat& depth_a, double depth_scale,
+                             const std::vector<cv::KeyPoint>& keypoints_a,
+                             const std::vector<float>& depths_a,
+                             const MotionRefitOptions& options) {
+  std::vector<float> out = depths_a;
+  if (!out.empty()) {
+    ClearDepthsNearEdges(depth_a, depth_scale, keypoints_a, options.depth_edges, &out);
+  }
+  return out;
+}
+
 MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& matches,
                         const std::vector<cv::KeyPoint>& keypoints_a,
                         const std::vector<cv::KeyPoint>& keypoints_b,

@@ -46,13 +46,14 @@ struct MotionRefitOptions {
   // Also solve for the rotation the matches alone measure (MotionRefit::rotation_from_matches,
   // for a gyro bias filter): a second, reweighted solve from the fit on, so only when asked.
   bool measure_rotation = false;
-  // The callers clear, from the depths they give the fit, the readings near an edge of the depth
-  // image (ClearDepthsNearEdges): such a keypoint gives an epipolar residual instead. The length
-  // of the translation rests on the few nearest keypoints with depth (their parallax is largest),
-  // so a handful of corners read with the foreground's depth set it: on EuRoC MH_05's take-off,
-  // three frames apart, 13 corners along a beam's outline at 0.6 m pulled the fit to 3 mm of a
-  // 24 mm translation with a stated sigma of 0.6 mm, and its windows lost 9 % of the pair's correct
-  // matches. The predictions keep those depths (a wrong one costs its own keypoint only).
+  // FitDepths clears, from the depths the callers give the fit, the readings near an edge of the
+  // depth image (ClearDepthsNearEdges): such a keypoint gives an epipolar residual instead. The
+  // length of the translation rests on the few nearest keypoints with depth (their parallax is
+  // largest), so a handful of corners read with the foreground's depth set it: on EuRoC MH_05's
+  // take-off, three frames apart, a dozen corners along a beam's outline at 0.6 m pulled the fit
+  // to 3 mm of a 24 mm translation with a stated sigma of 0.6 mm, and its windows lost 9 % of the
+  // pair's correct matches. The predictions keep those depths (a wrong one costs its own keypoint
+  // only).
   DepthEdgeOptions depth_edges;
   void Check() const;  // throws InvalidArgument
 };
@@ -92,6 +93,13 @@ std::optional<ImuRotationMeasurement> ImuRotationFromFit(const MotionRefit& refi
 // Where a correspondence ends in B (image pixels): the refined position or the track's, else the
 // matched keypoint.
 Eigen::Vector2d PositionInB(const Match& m, const std::vector<cv::KeyPoint>& keypoints_b);
+
+// The depths to give RefitMotion for A's keypoints: depths_a (SampleDepths of depth_a, metres, NaN
+// for none) with the readings near an edge of depth_a cleared as options.depth_edges says; empty
+// when depths_a is (then depth_a is not read). Throws InvalidArgument as ClearDepthsNearEdges.
+std::vector<float> FitDepths(const cv::Mat& depth_a, double depth_scale,
+                             const std::vector<cv::KeyPoint>& keypoints_a,
+                             const std::vector<float>& depths_a, const MotionRefitOptions& options);
 
 // The maximum a posteriori motion A -> B given the prior (the IMU's motion and covariance) and the
 // matches (query: keypoints_a, train: keypoints_b, image pixels; the refined position in B when

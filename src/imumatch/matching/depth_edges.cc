@@ -5,25 +5,18 @@
 #include <limits>
 
 #include "imumatch/core/error.h"
+#include "imumatch/matching/depth_reading.h"
 
 namespace imumatch {
 namespace {
 
-// Depth in metres of one raw value; NaN for no reading.
-inline float Metres(uint16_t v, float inv_scale) {
-  return v == 0 ? std::numeric_limits<float>::quiet_NaN() : static_cast<float>(v) * inv_scale;
-}
-inline float Metres(float v, float) {
-  return (std::isfinite(v) && v > 0.0f) ? v : std::numeric_limits<float>::quiet_NaN();
-}
-
 template <typename T>
-bool NearEdge(const cv::Mat& depth, float inv_scale, int cx, int cy, int radius, double ratio) {
+bool NearEdge(const cv::Mat& depth, double inv_scale, int cx, int cy, int radius, double ratio) {
   float lo = std::numeric_limits<float>::infinity(), hi = 0.0f;
   for (int r = std::max(cy - radius, 0); r <= std::min(cy + radius, depth.rows - 1); ++r) {
     const T* row = depth.ptr<T>(r);
     for (int c = std::max(cx - radius, 0); c <= std::min(cx + radius, depth.cols - 1); ++c) {
-      const float z = Metres(row[c], inv_scale);
+      const float z = ReadingToMetres<T>(row[c], inv_scale);
       if (std::isnan(z)) return true;  // a hole
       lo = std::min(lo, z);
       hi = std::max(hi, z);
@@ -47,13 +40,10 @@ int ClearDepthsNearEdges(const cv::Mat& depth, double depth_scale,
   IMUMATCH_CHECK(depths != nullptr, "no depths");
   IMUMATCH_CHECK(depths->size() == keypoints.size(),
                  depths->size() << " depths for " << keypoints.size() << " keypoints");
-  IMUMATCH_CHECK(!depth.empty(), "empty depth image");
-  IMUMATCH_CHECK(depth.type() == CV_16UC1 || depth.type() == CV_32FC1,
-                 "depth image must be CV_16UC1 or CV_32FC1");
-  IMUMATCH_CHECK(std::isfinite(depth_scale) && depth_scale > 0.0, "depth_scale=" << depth_scale);
+  CheckDepthImage(depth, depth_scale);
   if (!options.enabled) return 0;
   const bool raw = depth.type() == CV_16UC1;
-  const float inv_scale = raw ? static_cast<float>(1.0 / depth_scale) : 1.0f;
+  const double inv_scale = raw ? 1.0 / depth_scale : 1.0;
   int cleared = 0;
   for (size_t i = 0; i < keypoints.size(); ++i) {
     float& z = (*depths)[i];

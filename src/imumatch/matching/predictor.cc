@@ -7,6 +7,7 @@
 
 #include "imumatch/core/error.h"
 #include "imumatch/core/so3.h"
+#include "imumatch/matching/depth_reading.h"
 
 namespace imumatch {
 
@@ -535,17 +536,6 @@ std::vector<KeypointPrediction> PredictKeypoints(const PixelUndistorter& undisto
 
 namespace {
 template <typename T>
-float ReadingToMetres(T v, double inv_scale);
-template <>
-float ReadingToMetres<uint16_t>(uint16_t v, double inv_scale) {
-  return v == 0 ? std::numeric_limits<float>::quiet_NaN() : static_cast<float>(v * inv_scale);
-}
-template <>
-float ReadingToMetres<float>(float v, double) {
-  return (std::isfinite(v) && v > 0.0f) ? v : std::numeric_limits<float>::quiet_NaN();
-}
-
-template <typename T>
 float SampleTyped(const cv::Mat& depth, double inv_scale, float x, float y, DepthSampling mode) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   if (!std::isfinite(x) || !std::isfinite(y)) return nan;
@@ -585,13 +575,6 @@ float SampleTyped(const cv::Mat& depth, double inv_scale, float x, float y, Dept
   return nan;
 }
 
-void CheckDepthImage(const cv::Mat& depth, double depth_scale) {
-  IMUMATCH_CHECK(!depth.empty(), "empty depth image");
-  IMUMATCH_CHECK(
-      depth.type() == CV_16UC1 || depth.type() == CV_32FC1,
-      "depth image must be CV_16UC1 (raw) or CV_32FC1 (metres), got type " << depth.type());
-  IMUMATCH_CHECK(std::isfinite(depth_scale) && depth_scale > 0.0, "depth_scale=" << depth_scale);
-}
 }  // namespace
 
 float SampleDepth(const cv::Mat& depth, double depth_scale, float x, float y, DepthSampling mode) {
