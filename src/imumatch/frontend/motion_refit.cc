@@ -3,12 +3,14 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
 #include "imumatch/core/error.h"
 #include "imumatch/core/so3.h"
+#include "imumatch/frontend/translation_direction.h"
 
 namespace imumatch {
 namespace {
@@ -29,56 +31,15 @@ Eigen::Vector3d Bearing(const PinholeCamera& camera, const Eigen::Vector2d& idea
   return camera.IdealToNormalized(ideal).homogeneous();
 }
 
-// The median epipolar distance (ideal px) of the correspondences (bearings in A already rotated
-// into B's orientation, ra = R x_a) for translation t.
-double MedianEpipolarDistance(const std::vector<Eigen::Vector3d>& ra,
-                              const std::vector<Eigen::Vector3d>& xb, const Eigen::Vector3d& t,
-                              double f, std::vector<double>& scratch) {
-  scratch.clear();
-  for (size_t i = 0; i < ra.size(); ++i) {
-    const Eigen::Vector3d l = t.cross(ra[i]);
-    const double n2 = l.x() * l.x() + l.y() * l.y();
-    if (n2 > 0.0) scratch.push_back(f * std::fabs(xb[i].dot(l)) / std::sqrt(n2));
-  }
-  if (scratch.empty()) return std::numeric_limits<double>::infinity();
-  const auto mid = scratch.begin() + static_cast<std::ptrdiff_t>(scratch.size() / 2);
-  std::nth_element(scratch.begin(), mid, scratch.end());
-  return *mid;
-}
-
-// The translation direction that the epipolar constraints t . (R x_a x x_b) = 0 favour with the
-// rotation held: the eigenvector of the smallest eigenvalue of sum w_i n_i n_i^T, each row
-// weighted by 1 / |line_i|^2 (so that the algebraic error is the distance in B) and a Cauchy
-// weight on that distance; three reweighted rounds from `start` (the sign kept on its side).
-// Linear algebra only: the distances are strongly nonlinear in the direction when the epipole
-// lies in the image (forward motion), where Gauss-Newton from a direction a few degrees off
-// converges slowly.
-Eigen::Vector3d EpipolarDirection(const std::vector<Eigen::Vector3d>& ra,
-                                  const std::vector<Eigen::Vector3d>& xb,
-                                  const Eigen::Vector3d& start, double f, double min_sigma,
-                                  double cauchy_scale, std::vector<double>& scratch) {
-  Eigen::Vector3d t = start.normalized();
-  for (int round = 0; round < 3; ++round) {
-    const double sigma =
-        std::max(1.4826 * MedianEpipolarDistance(ra, xb, t, f, scratch), min_sigma);
-    const double c2 = cauchy_scale * cauchy_scale * sigma * sigma;
-    Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
-    for (size_t i = 0; i < ra.size(); ++i) {
-      const Eigen::Vector3d l = t.cross(ra[i]);
-      const double n2 = l.x() * l.x() + l.y() * l.y();
-      if (!(n2 > 0.0)) continue;
-      const Eigen::Vector3d nrm = ra[i].cross(xb[i]);
-      const double e = f * xb[i].dot(l) / std::sqrt(n2);
-      const double w = 1.0 / ((1.0 + e * e / c2) * n2);
-      m.noalias() += w * nrm * nrm.transpose();
-    }
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(m);
-    if (es.info() != Eigen::Success) break;
-    Eigen::Vector3d next = es.eigenvectors().col(0);
-    if (!next.allFinite()) break;
-    t = next.dot(start) < 0.0 ? Eigen::Vector3d(-next) : next;
-  }
-  return t;
+// Of two fits of the same matches from different starts: one that holds beats one that does not;
+// of two that hold, the one whose residuals are smaller (median, by more than 1 %), else the
+// one nearer the prior.
+bool FitIsBetter(const MotionRefit& a, const MotionRefit& b) {
+  if (a.ok != b.ok) return a.ok;
+  if (!a.ok) return false;
+  const double ma = a.median_residual_px, mb = b.median_residual_px;
+  if (std::fabs(ma - mb) > 0.01 * std::max(ma, mb)) return ma < mb;
+  return a.mahalanobis2 < b.mahalanobis2;
 }
 
 }  // namespace
@@ -94,6 +55,8 @@ void MotionRefitOptions::Check() const {
   IMUMATCH_CHECK(iterations >= 1 && iterations <= 100, "iterations=" << iterations);
   IMUMATCH_CHECK(reweight_steps >= 1 && reweight_steps <= iterations,
                  "reweight_steps=" << reweight_steps << " (1 .. iterations=" << iterations << ")");
+  IMUMATCH_CHECK(direction_hypotheses >= 0 && direction_hypotheses <= 10000,
+                 "direction_hypotheses=" << direction_hypotheses << " (0 .. 10000)");
   IMUMATCH_CHECK(agreement_probability > 0.0 && agreement_probability < 1.0,
                  "agreement_probability=" << agreement_probability << " (must be in (0, 1))");
 }
@@ -124,8 +87,8 @@ MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& mat
   IMUMATCH_CHECK(depths_a.empty() || depths_a.size() == keypoints_a.size(),
                  depths_a.size() << " depths for " << keypoints_a.size() << " keypoints of A");
   IMUMATCH_CHECK(prior.covariance.allFinite(), "prior motion covariance is not finite");
-  MotionRefit out;
-  out.motion = prior;
+  MotionRefit base;
+  base.motion = prior;
   const PinholeCamera& camera = undistorter.camera();
   const double f = 0.5 * (camera.fx + camera.fy);
 
@@ -154,15 +117,15 @@ MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& mat
       const double z = depths_a[static_cast<size_t>(m.query_idx)];
       if (prediction.IsUsableDepth(z)) {
         c.z = z;
-        ++out.with_depth;
+        ++base.with_depth;
       }
     }
     cs.push_back(c);
   }
-  out.correspondences = static_cast<int>(cs.size());
-  if (out.correspondences < options.min_inliers) {
-    out.reason = "too few matches (" + std::to_string(out.correspondences) + ")";
-    return out;
+  base.correspondences = static_cast<int>(cs.size());
+  if (base.correspondences < options.min_inliers) {
+    base.reason = "too few matches (" + std::to_string(base.correspondences) + ")";
+    return base;
   }
 
   Eigen::Matrix<double, 6, 6> prior_cov = prior.covariance;
@@ -170,224 +133,268 @@ MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& mat
   const Eigen::Matrix<double, 6, 6> prior_info = prior_cov.inverse();
   const Eigen::Matrix3d r_prior = prior.cam_b_from_cam_a.RotationMatrix();
   const Eigen::Vector3d& t_prior = prior.cam_b_from_cam_a.translation;
-  Eigen::Matrix3d r = r_prior;
-  Eigen::Vector3d t = t_prior;
   // Start: the prior's rotation and length, and the translation direction the epipolar
   // constraints favour when it explains the matches better than the prior's (a translation
-  // under 1 mm has no direction to estimate).
+  // under 1 mm has no direction to estimate). A second start from StartTranslation when its
+  // direction differs (by more than a degree) and explains the matches better than where the fit
+  // from the first ended: then the fit runs again from it and the better fit is kept
+  // (FitIsBetter).
+  Eigen::Vector3d t_start = t_prior;
+  bool second_start = false;
+  Eigen::Vector3d t_second = t_prior;
+  std::vector<Eigen::Vector3d> ra_prior, xb_all;  // R_prior x_a, x_b
+  double start_sigma = options.min_residual_px;
   if (t_prior.norm() >= 1e-3) {
-    std::vector<Eigen::Vector3d> ra(cs.size()), xb(cs.size());
+    ra_prior.resize(cs.size());
+    xb_all.resize(cs.size());
     for (size_t i = 0; i < cs.size(); ++i) {
-      ra[i] = r_prior * cs[i].xa;
-      xb[i] = cs[i].xb;
+      ra_prior[i] = r_prior * cs[i].xa;
+      xb_all[i] = cs[i].xb;
     }
     std::vector<double> scratch;
-    const Eigen::Vector3d dir = EpipolarDirection(ra, xb, t_prior, f, options.min_residual_px,
-                                                  options.cauchy_scale, scratch);
-    if (MedianEpipolarDistance(ra, xb, dir, f, scratch) <
-        MedianEpipolarDistance(ra, xb, t_prior, f, scratch)) {
-      t = t_prior.norm() * dir;
+    const Eigen::Vector3d dir = EpipolarTranslationDirection(
+        ra_prior, xb_all, t_prior, f, options.min_residual_px, options.cauchy_scale, scratch);
+    double start_median = MedianEpipolarDistancePx(ra_prior, xb_all, t_prior, f, scratch);
+    const double dir_median = MedianEpipolarDistancePx(ra_prior, xb_all, dir, f, scratch);
+    if (dir_median < start_median) {
+      t_start = t_prior.norm() * dir;
+      start_median = dir_median;
+    }
+    if (options.direction_hypotheses > 0) {
+      start_sigma = std::max(options.min_residual_px, 1.4826 * start_median);
+      t_second = SearchTranslationDirection(
+          ra_prior, xb_all, t_start, t_prior, prior_info.bottomRightCorner<3, 3>(), f, start_sigma,
+          options.cauchy_scale, options.direction_hypotheses, scratch);
+      second_start = t_second.normalized().dot(t_start.normalized()) < std::cos(1.0 * M_PI / 180.0);
     }
   }
-  auto from_prior = [&] {
-    Eigen::Matrix<double, 6, 1> d;
-    d.head<3>() = LogSO3(Eigen::Quaterniond(r * r_prior.transpose()));
-    d.tail<3>() = t - t_prior;
-    return d;
-  };
 
-  // One correspondence's residual (ideal px) and its Jacobian; rows 0 when it has none (behind
-  // camera B, or B's bearing on the epipole).
-  struct Row {
-    Eigen::Matrix<double, 2, 6> j;
-    Eigen::Vector2d e;
-    int rows;  // 2: reprojection; 1: epipolar (e[1] and j's second row zero); 0: none
-  };
-  auto residual = [&](const Correspondence& c, Row& row) {
-    row.rows = 0;
-    const Eigen::Vector3d ra = r * c.xa;
-    if (std::isfinite(c.z)) {
-      const Eigen::Vector3d pr = ra * c.z;
-      const Eigen::Vector3d q = pr + t;
-      if (!(q.z() > 1e-6)) return;
-      row.e = Eigen::Vector2d(f * (q.x() / q.z() - c.xb.x()), f * (q.y() / q.z() - c.xb.y()));
-      Eigen::Matrix<double, 2, 3> dpi;
-      dpi << f / q.z(), 0.0, -f * q.x() / (q.z() * q.z()), 0.0, f / q.z(),
-          -f * q.y() / (q.z() * q.z());
-      // dq / d(dtheta) = -Hat(R p), dq / d(dt) = I; a row a of dpi gives -a Hat(p) = -(a x p)^T.
-      row.j.block<1, 3>(0, 0) = -dpi.row(0).cross(pr.transpose());
-      row.j.block<1, 3>(1, 0) = -dpi.row(1).cross(pr.transpose());
-      row.j.rightCols<3>() = dpi;
-      row.rows = 2;
-      return;
-    }
-    // Epipolar line l = t x R x_a in B; e = f (x_b . l) / |(l_x, l_y)|.
-    const Eigen::Vector3d l = t.cross(ra);
-    const double n = std::sqrt(l.x() * l.x() + l.y() * l.y());
-    if (!(n > 1e-12)) return;
-    row.e = Eigen::Vector2d(f * c.xb.dot(l) / n, 0.0);
-    // de / dl = f / n (x_b - (x_b . l) / n^2 (l_x, l_y, 0)): zero along l, so e does not change
-    // with t's length. dl / d(dtheta) = -Hat(t) Hat(R x_a), dl / d(dt) = -Hat(R x_a).
-    const Eigen::RowVector3d de_dl =
-        (f / n) *
-        (c.xb.transpose() - (c.xb.dot(l) / (n * n)) * Eigen::RowVector3d(l.x(), l.y(), 0.0));
-    // a Hat(v) = (a x v)^T for a row a: -a Hat(t) Hat(ra) = -((a x t) x ra)^T.
-    row.j.setZero();
-    row.j.block<1, 3>(0, 0) = -(de_dl.cross(t.transpose())).cross(ra.transpose());
-    row.j.block<1, 3>(0, 3) = -de_dl.cross(ra.transpose());
-    row.rows = 1;
-  };
+  auto solve = [&](const Eigen::Vector3d& t_from) {
+    MotionRefit out = base;
+    Eigen::Matrix3d r = r_prior;
+    Eigen::Vector3d t = t_from;
+    auto from_prior = [&] {
+      Eigen::Matrix<double, 6, 1> d;
+      d.head<3>() = LogSO3(Eigen::Quaterniond(r * r_prior.transpose()));
+      d.tail<3>() = t - t_prior;
+      return d;
+    };
 
-  // Per iteration: every residual and Jacobian once; while reweighting, their robust sigma and
-  // Cauchy weights; then the normal equations of the weighted residuals and the prior.
-  // Reweighting every step converges only linearly (about halving the error per step on MH_05),
-  // so the sigma and the weights are kept once the sigma settles (or after
-  // options.reweight_steps): Gauss-Newton on the fixed weighted problem then converges in a few.
-  // Cauchy weight of a row at squared scale c2 (per residual row).
-  auto cauchy_weight = [](const Row& row, double c2) {
-    return 1.0 / (1.0 + row.e.squaredNorm() / (row.rows * c2));
-  };
-  std::vector<Row> rs(cs.size());
-  std::vector<double> weight(cs.size(), 0.0);
-  std::vector<double> abs_rows;
-  abs_rows.reserve(2 * cs.size());
-  Eigen::Matrix<double, 6, 6> info = Eigen::Matrix<double, 6, 6>::Zero();
-  double sigma = options.min_residual_px;
-  double last_step2 = std::numeric_limits<double>::infinity();  // squared, in the fit's sigmas
-  bool reweight = true;
-  for (int iteration = 0; iteration <= options.iterations; ++iteration) {
-    // Reweight until the sigma settles (within 1 % of the previous step's) or reweight_steps.
-    reweight = reweight && iteration < options.reweight_steps;
-    abs_rows.clear();
-    for (size_t i = 0; i < cs.size(); ++i) {
-      Row& row = rs[i];
-      residual(cs[i], row);
-      if (row.rows == 0) continue;
-      abs_rows.push_back(std::fabs(row.e[0]));
-      if (row.rows == 2) abs_rows.push_back(std::fabs(row.e[1]));
+    double sigma = options.min_residual_px;
+    // One correspondence's residual (ideal px) and its Jacobian; rows 0 when it has none (behind
+    // camera B, or B's bearing on the epipole).
+    struct Row {
+      Eigen::Matrix<double, 2, 6> j;
+      Eigen::Vector2d e;
+      int rows;  // 2: reprojection; 1: epipolar (e[1] and j's second row zero); 0: none
+    };
+    auto residual = [&](const Correspondence& c, Row& row) {
+      row.rows = 0;
+      const Eigen::Vector3d ra = r * c.xa;
+      if (std::isfinite(c.z)) {
+        const Eigen::Vector3d pr = ra * c.z;
+        const Eigen::Vector3d q = pr + t;
+        if (!(q.z() > 1e-6)) return;
+        row.e = Eigen::Vector2d(f * (q.x() / q.z() - c.xb.x()), f * (q.y() / q.z() - c.xb.y()));
+        Eigen::Matrix<double, 2, 3> dpi;
+        dpi << f / q.z(), 0.0, -f * q.x() / (q.z() * q.z()), 0.0, f / q.z(),
+            -f * q.y() / (q.z() * q.z());
+        // dq / d(dtheta) = -Hat(R p), dq / d(dt) = I; a row a of dpi gives -a Hat(p) = -(a x p)^T.
+        row.j.block<1, 3>(0, 0) = -dpi.row(0).cross(pr.transpose());
+        row.j.block<1, 3>(1, 0) = -dpi.row(1).cross(pr.transpose());
+        row.j.rightCols<3>() = dpi;
+        row.rows = 2;
+        return;
+      }
+      // Epipolar line l = t x R x_a in B; e = f (x_b . l) / |(l_x, l_y)|.
+      const Eigen::Vector3d l = t.cross(ra);
+      const double n = std::sqrt(l.x() * l.x() + l.y() * l.y());
+      if (!(n > 1e-12)) return;
+      row.e = Eigen::Vector2d(f * c.xb.dot(l) / n, 0.0);
+      // de / dl = f / n (x_b - (x_b . l) / n^2 (l_x, l_y, 0)): zero along l, so e does not change
+      // with t's length. dl / d(dtheta) = -Hat(t) Hat(R x_a), dl / d(dt) = -Hat(R x_a).
+      const Eigen::RowVector3d de_dl =
+          (f / n) *
+          (c.xb.transpose() - (c.xb.dot(l) / (n * n)) * Eigen::RowVector3d(l.x(), l.y(), 0.0));
+      // a Hat(v) = (a x v)^T for a row a: -a Hat(t) Hat(ra) = -((a x t) x ra)^T.
+      row.j.setZero();
+      row.j.block<1, 3>(0, 0) = -(de_dl.cross(t.transpose())).cross(ra.transpose());
+      row.j.block<1, 3>(0, 3) = -de_dl.cross(ra.transpose());
+      row.rows = 1;
+    };
+
+    // Per iteration: every residual and Jacobian once; while reweighting, their robust sigma and
+    // Cauchy weights; then the normal equations of the weighted residuals and the prior.
+    // Reweighting every step converges only linearly (about halving the error per step on MH_05),
+    // so the sigma and the weights are kept once the sigma settles (or after
+    // options.reweight_steps): Gauss-Newton on the fixed weighted problem then converges in a few.
+    // Cauchy weight of a row at squared scale c2 (per residual row).
+    auto cauchy_weight = [](const Row& row, double c2) {
+      return 1.0 / (1.0 + row.e.squaredNorm() / (row.rows * c2));
+    };
+    std::vector<Row> rs(cs.size());
+    std::vector<double> weight(cs.size(), 0.0);
+    std::vector<double> abs_rows;
+    abs_rows.reserve(2 * cs.size());
+    Eigen::Matrix<double, 6, 6> info = Eigen::Matrix<double, 6, 6>::Zero();
+    double last_step2 = std::numeric_limits<double>::infinity();  // squared, in the fit's sigmas
+    bool reweight = true;
+    for (int iteration = 0; iteration <= options.iterations; ++iteration) {
+      // Reweight until the sigma settles (within 1 % of the previous step's) or reweight_steps.
+      reweight = reweight && iteration < options.reweight_steps;
+      abs_rows.clear();
+      for (size_t i = 0; i < cs.size(); ++i) {
+        Row& row = rs[i];
+        residual(cs[i], row);
+        if (row.rows == 0) continue;
+        abs_rows.push_back(std::fabs(row.e[0]));
+        if (row.rows == 2) abs_rows.push_back(std::fabs(row.e[1]));
+      }
+      if (abs_rows.empty()) break;
+      bool reweighted = false;
+      if (reweight) {
+        const auto mid = abs_rows.begin() + static_cast<std::ptrdiff_t>(abs_rows.size() / 2);
+        std::nth_element(abs_rows.begin(), mid, abs_rows.end());
+        const double next = std::max(1.4826 * *mid, options.min_residual_px);
+        reweight = iteration == 0 || std::fabs(next - sigma) > 0.01 * sigma;
+        reweighted = true;
+        sigma = next;
+      }
+      const double c2 = options.cauchy_scale * options.cauchy_scale * sigma * sigma;
+      const double inlier2 = options.inlier_sigmas * options.inlier_sigmas * sigma * sigma;
+      Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
+      Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
+      out.inliers = 0;
+      for (size_t i = 0; i < cs.size(); ++i) {
+        const Row& row = rs[i];
+        if (row.rows == 0) continue;
+        const double e2 = row.e.squaredNorm();
+        out.inliers += e2 <= inlier2 * row.rows ? 1 : 0;
+        if (reweighted) weight[i] = cauchy_weight(row, c2);
+        h.noalias() += weight[i] * row.j.transpose() * row.j;
+        g.noalias() += weight[i] * row.j.transpose() * row.e;
+      }
+      info = h / (sigma * sigma);
+      if (iteration == options.iterations) break;  // the last pass only evaluates
+      ++out.iterations;
+      const Eigen::Matrix<double, 6, 1> step =
+          -(prior_info + info).ldlt().solve(prior_info * from_prior() + g / (sigma * sigma));
+      if (!step.allFinite()) break;
+      r = ExpSO3(step.head<3>()).toRotationMatrix() * r;
+      t += step.tail<3>();
+      // Converged: the step is below a tenth of the fit's own standard deviation (the windows
+      // around the predictions are at least the keypoints' noise, far wider).
+      last_step2 = step.dot((prior_info + info) * step);
+      if (!reweighted && last_step2 < 1e-2) {
+        iteration = options.iterations - 1;  // one more pass to evaluate at the final motion
+      }
     }
-    if (abs_rows.empty()) break;
-    bool reweighted = false;
-    if (reweight) {
+    out.sigma_px = sigma;
+    if (!abs_rows.empty()) {  // the last pass's residuals, at the final motion
       const auto mid = abs_rows.begin() + static_cast<std::ptrdiff_t>(abs_rows.size() / 2);
       std::nth_element(abs_rows.begin(), mid, abs_rows.end());
-      const double next = std::max(1.4826 * *mid, options.min_residual_px);
-      reweight = iteration == 0 || std::fabs(next - sigma) > 0.01 * sigma;
-      reweighted = true;
-      sigma = next;
+      out.median_residual_px = *mid;
     }
-    const double c2 = options.cauchy_scale * options.cauchy_scale * sigma * sigma;
-    const double inlier2 = options.inlier_sigmas * options.inlier_sigmas * sigma * sigma;
-    Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
-    Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
-    out.inliers = 0;
-    for (size_t i = 0; i < cs.size(); ++i) {
-      const Row& row = rs[i];
-      if (row.rows == 0) continue;
-      const double e2 = row.e.squaredNorm();
-      out.inliers += e2 <= inlier2 * row.rows ? 1 : 0;
-      if (reweighted) weight[i] = cauchy_weight(row, c2);
-      h.noalias() += weight[i] * row.j.transpose() * row.j;
-      g.noalias() += weight[i] * row.j.transpose() * row.e;
+    const Eigen::Matrix<double, 6, 1> d = from_prior();
+    out.mahalanobis2 = d.dot(prior_info * d);
+    if (out.inliers < options.min_inliers) {
+      out.reason = "motion fit: " + std::to_string(out.inliers) + " inliers";
+      return out;
     }
-    info = h / (sigma * sigma);
-    if (iteration == options.iterations) break;  // the last pass only evaluates
-    ++out.iterations;
-    const Eigen::Matrix<double, 6, 1> step =
-        -(prior_info + info).ldlt().solve(prior_info * from_prior() + g / (sigma * sigma));
-    if (!step.allFinite()) break;
-    r = ExpSO3(step.head<3>()).toRotationMatrix() * r;
-    t += step.tail<3>();
-    // Converged: the step is below a tenth of the fit's own standard deviation (the windows
-    // around the predictions are at least the keypoints' noise, far wider).
-    last_step2 = step.dot((prior_info + info) * step);
-    if (!reweighted && last_step2 < 1e-2) {
-      iteration = options.iterations - 1;  // one more pass to evaluate at the final motion
+    // The windows assume the keypoints' localisation noise in both frames (sqrt(2) x
+    // keypoint_sigma_px per axis, before the size scaling): residuals beyond it mean the motion
+    // does not explain the pair (a moving object, a wrong depth map, two motions) and the IMU's
+    // wider windows stand.
+    const double noise_px = std::sqrt(2.0) * prediction.keypoint_sigma_px;
+    if (!(sigma <= noise_px)) {
+      out.reason = "motion fit: residuals (robust sigma " + std::to_string(sigma) +
+                   " px) beyond the keypoints' noise (" + std::to_string(noise_px) + " px)";
+      return out;
     }
-  }
-  out.sigma_px = sigma;
-  const Eigen::Matrix<double, 6, 1> d = from_prior();
-  out.mahalanobis2 = d.dot(prior_info * d);
-  if (out.inliers < options.min_inliers) {
-    out.reason = "motion fit: " + std::to_string(out.inliers) + " inliers";
-    return out;
-  }
-  // The windows assume the keypoints' localisation noise in both frames (sqrt(2) x
-  // keypoint_sigma_px per axis, before the size scaling): residuals beyond it mean the motion does
-  // not explain the pair (a moving object, a wrong depth map, two motions) and the IMU's wider
-  // windows stand.
-  const double noise_px = std::sqrt(2.0) * prediction.keypoint_sigma_px;
-  if (!(sigma <= noise_px)) {
-    out.reason = "motion fit: residuals (robust sigma " + std::to_string(sigma) +
-                 " px) beyond the keypoints' noise (" + std::to_string(noise_px) + " px)";
-    return out;
-  }
-  // Not converged: the last step was more than the fit's own standard deviation, so the windows
-  // would be centred farther from the optimum than their motion part is wide.
-  if (!(last_step2 <= 1.0)) {
-    out.reason = "motion fit: not converged in " + std::to_string(options.iterations) + " steps";
-    return out;
-  }
-  const double gate = ChiSquare6Quantile(options.agreement_probability);
-  if (!(out.mahalanobis2 <= gate) || !r.allFinite() || !t.allFinite()) {
-    out.disagrees = true;
-    out.reason = "the fit disagrees with the prior motion (squared Mahalanobis distance " +
-                 std::to_string(out.mahalanobis2) + " > " + std::to_string(gate) + ")";
-    return out;
-  }
-  Eigen::Matrix<double, 6, 6> cov = (prior_info + info).inverse();
-  out.ok = cov.allFinite();
-  if (!out.ok) {
-    out.reason = "motion fit: singular information";
-    return out;
-  }
-  out.motion.cam_b_from_cam_a = Rigid3d(Eigen::Quaterniond(r).normalized(), t);
-  out.motion.covariance = 0.5 * (cov + cov.transpose());
-  if (!options.measure_rotation) return out;
+    // Not converged: the last step was more than the fit's own standard deviation, so the windows
+    // would be centred farther from the optimum than their motion part is wide.
+    if (!(last_step2 <= 1.0)) {
+      out.reason = "motion fit: not converged in " + std::to_string(options.iterations) + " steps";
+      return out;
+    }
+    const double gate = ChiSquare6Quantile(options.agreement_probability);
+    if (!(out.mahalanobis2 <= gate) || !r.allFinite() || !t.allFinite()) {
+      out.disagrees = true;
+      out.reason = "the fit disagrees with the prior motion (squared Mahalanobis distance " +
+                   std::to_string(out.mahalanobis2) + " > " + std::to_string(gate) + ")";
+      return out;
+    }
+    Eigen::Matrix<double, 6, 6> cov = (prior_info + info).inverse();
+    out.ok = cov.allFinite();
+    if (!out.ok) {
+      out.reason = "motion fit: singular information";
+      return out;
+    }
+    out.motion.cam_b_from_cam_a = Rigid3d(Eigen::Quaterniond(r).normalized(), t);
+    out.motion.covariance = 0.5 * (cov + cov.transpose());
+    if (!options.measure_rotation) return out;
 
-  // The rotation the matches alone measure, for a gyro bias filter (ImuRotationFromFit): the
-  // same residuals from the fit on, with the prior's translation information only (the epipolar
-  // residuals do not see the translation's length) and the Cauchy weights recomputed every step
-  // (iteratively reweighted least squares at the fit's sigma). Weights kept from the fit would be
-  // those of a motion the prior pulled: on 40 scenes with a prior 3 sigma off in rotation, one
-  // step from the fit with its weights kept 9 % of the prior's offset.
-  Eigen::Matrix<double, 6, 6> translation_info = Eigen::Matrix<double, 6, 6>::Zero();
-  translation_info.bottomRightCorner<3, 3>() = prior_cov.bottomRightCorner<3, 3>().inverse();
-  const double c2 = options.cauchy_scale * options.cauchy_scale * sigma * sigma;
-  Eigen::Matrix<double, 6, 6> alone = Eigen::Matrix<double, 6, 6>::Zero();
-  bool converged = false;
-  for (int iteration = 0; iteration < 3 * options.iterations && !converged; ++iteration) {
-    Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
-    Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
-    for (size_t i = 0; i < cs.size(); ++i) {
-      Row& row = rs[i];
-      residual(cs[i], row);
-      if (row.rows == 0) continue;
-      const double w = cauchy_weight(row, c2);
-      h.noalias() += w * row.j.transpose() * row.j;
-      g.noalias() += w * row.j.transpose() * row.e;
+    // The rotation the matches alone measure, for a gyro bias filter (ImuRotationFromFit): the
+    // same residuals from the fit on, with the prior's translation information only (the epipolar
+    // residuals do not see the translation's length) and the Cauchy weights recomputed every step
+    // (iteratively reweighted least squares at the fit's sigma). Weights kept from the fit would be
+    // those of a motion the prior pulled: on 40 scenes with a prior 3 sigma off in rotation, one
+    // step from the fit with its weights kept 9 % of the prior's offset.
+    Eigen::Matrix<double, 6, 6> translation_info = Eigen::Matrix<double, 6, 6>::Zero();
+    translation_info.bottomRightCorner<3, 3>() = prior_cov.bottomRightCorner<3, 3>().inverse();
+    const double c2 = options.cauchy_scale * options.cauchy_scale * sigma * sigma;
+    Eigen::Matrix<double, 6, 6> alone = Eigen::Matrix<double, 6, 6>::Zero();
+    bool converged = false;
+    for (int iteration = 0; iteration < 3 * options.iterations && !converged; ++iteration) {
+      Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
+      Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
+      for (size_t i = 0; i < cs.size(); ++i) {
+        Row& row = rs[i];
+        residual(cs[i], row);
+        if (row.rows == 0) continue;
+        const double w = cauchy_weight(row, c2);
+        h.noalias() += w * row.j.transpose() * row.j;
+        g.noalias() += w * row.j.transpose() * row.e;
+      }
+      alone = translation_info + h / (sigma * sigma);
+      const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(alone);
+      if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) break;
+      const Eigen::Matrix<double, 6, 1> step =
+          -ldlt.solve(translation_info * from_prior() + g / (sigma * sigma));
+      if (!step.allFinite()) break;
+      r = ExpSO3(step.head<3>()).toRotationMatrix() * r;
+      t += step.tail<3>();
+      converged = step.dot(alone * step) < 1e-4;  // a hundredth of its own sigma
     }
-    alone = translation_info + h / (sigma * sigma);
-    const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(alone);
-    if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) break;
-    const Eigen::Matrix<double, 6, 1> step =
-        -ldlt.solve(translation_info * from_prior() + g / (sigma * sigma));
-    if (!step.allFinite()) break;
-    r = ExpSO3(step.head<3>()).toRotationMatrix() * r;
-    t += step.tail<3>();
-    converged = step.dot(alone * step) < 1e-4;  // a hundredth of its own sigma
-  }
-  if (converged) {
-    const Eigen::Matrix<double, 6, 6> alone_cov = alone.inverse();
-    const Eigen::Matrix3d cov_theta =
-        0.5 * (alone_cov.topLeftCorner<3, 3>() + alone_cov.topLeftCorner<3, 3>().transpose());
-    if (cov_theta.allFinite() && Eigen::LLT<Eigen::Matrix3d>(cov_theta).info() == Eigen::Success) {
-      out.rotation_from_matches_ok = true;
-      out.rotation_from_matches = Eigen::Quaterniond(r).normalized();
-      out.rotation_from_matches_covariance = cov_theta;
+    if (converged) {
+      const Eigen::Matrix<double, 6, 6> alone_cov = alone.inverse();
+      const Eigen::Matrix3d cov_theta =
+          0.5 * (alone_cov.topLeftCorner<3, 3>() + alone_cov.topLeftCorner<3, 3>().transpose());
+      if (cov_theta.allFinite() &&
+          Eigen::LLT<Eigen::Matrix3d>(cov_theta).info() == Eigen::Success) {
+        out.rotation_from_matches_ok = true;
+        out.rotation_from_matches = Eigen::Quaterniond(r).normalized();
+        out.rotation_from_matches_covariance = cov_theta;
+      }
     }
+    return out;
+  };
+  MotionRefit first = solve(t_start);
+  if (second_start) {
+    // The first fit's direction at the prior's length, under the same cost: when the second start
+    // explains the matches better, the first fit settled in a wrong minimum.
+    const double length = t_prior.norm();
+    const Eigen::Matrix3d t_info = prior_info.bottomRightCorner<3, 3>();
+    const double cost_first = TranslationDirectionCost(
+        ra_prior, xb_all, length * first.motion.cam_b_from_cam_a.translation.normalized(), f,
+        start_sigma, options.cauchy_scale, t_prior, t_info);
+    const double cost_second = TranslationDirectionCost(ra_prior, xb_all, t_second, f, start_sigma,
+                                                        options.cauchy_scale, t_prior, t_info);
+    second_start = cost_second < cost_first;
   }
-  return out;
+  if (!second_start) return first;
+  MotionRefit second = solve(t_second);
+  return FitIsBetter(second, first) ? second : first;
 }
 
 std::optional<ImuRotationMeasurement> ImuRotationFromFit(const MotionRefit& refit,

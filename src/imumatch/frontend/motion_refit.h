@@ -43,6 +43,12 @@ struct MotionRefitOptions {
   // (a repeated texture, a moving object) or the prior is wrong; either way the prior's wider
   // windows are the safe ones.
   double agreement_probability = 0.9999;
+  // The fit starts from the prior's translation direction or the one the epipolar constraints
+  // favour near it; from a prior tens of degrees off in direction (a short translation: hovering,
+  // take-off) that start can lead to a wrong minimum. direction_hypotheses directions through
+  // pairs of matches are scored as well, and when the best explains the matches better than the
+  // first fit, the fit runs again from it and the better of the two is kept. 0: no second start.
+  int direction_hypotheses = 48;
   // Also solve for the rotation the matches alone measure (MotionRefit::rotation_from_matches,
   // for a gyro bias filter): a second, reweighted solve from the fit on, so only when asked.
   bool measure_rotation = false;
@@ -65,9 +71,10 @@ struct MotionRefit {
   int correspondences = 0;
   int with_depth = 0;  // of them, with a usable depth in A (reprojection residuals)
   int inliers = 0;
-  int iterations = 0;         // Gauss-Newton steps taken
-  double sigma_px = 0.0;      // the residuals' robust sigma (ideal px)
-  double mahalanobis2 = 0.0;  // of the fit from the prior
+  int iterations = 0;     // Gauss-Newton steps taken
+  double sigma_px = 0.0;  // the residuals' robust sigma (ideal px), at least min_residual_px
+  double median_residual_px = 0.0;  // median absolute residual row (ideal px) at the motion
+  double mahalanobis2 = 0.0;        // of the fit from the prior
   CameraMotion motion;
   // The rotation cam_b_from_cam_a that the matches alone measure (without the prior's rotation,
   // with its translation: see ImuRotationFromFit) and its covariance (3x3, left perturbation as

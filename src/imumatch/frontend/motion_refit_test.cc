@@ -268,6 +268,92 @@ TEST(MotionRefitTest, ResidualsBeyondTheKeypointsNoiseAreRefused) {
                   .ok);
 }
 
+// A drone lifting off (EuRoC MH_05, frames 11 -> 12): 5.8 mm of translation, mostly up, and the
+// IMU's translation 5 mm off, 45 degrees off in direction. Most points are far (8-12 m: 0.3 px
+// of parallax), a quarter lie on the ground 0.3-0.8 m away at the bottom of the image (4-9 px);
+// none has depth; a fifth of the matches are wrong by 3-15 px (a first pass at take-off). From
+// the prior's direction the fit often settles in a wrong minimum and claims to be sure of it, or
+// fails; with the second start from pairs of matches it holds more often and is right more often.
+// Over 40 scenes.
+TEST(MotionRefitTest, AtTakeOffAPriorFarOffInDirectionIsCorrected) {
+  const PinholeCamera c = Camera();
+  const PixelUndistorter und(c);
+  const Rigid3d truth(ExpSO3(Eigen::Vector3d(-0.0078, 0.0003, -0.0003)),
+                      Eigen::Vector3d(0.0005, 0.0050, -0.0028));
+  const Eigen::Vector3d t_true = truth.translation;
+  CameraMotion prior;
+  prior.cam_b_from_cam_a = Rigid3d(truth.rotation, Eigen::Vector3d(-0.0036, 0.0032, -0.0053));
+  prior.covariance = Vec6(3e-4, 3e-4, 3e-4, 2.5e-3, 2.5e-3, 2.5e-3).cwiseAbs2().asDiagonal();
+  ASSERT_GT(std::acos(prior.cam_b_from_cam_a.translation.normalized().dot(t_true.normalized())),
+            0.75);  // 45 deg
+  MotionRefitOptions one_start;
+  one_start.direction_hypotheses = 0;
+  // Per scene: the fit holds and the truth lies outside its 99.9 % ellipsoid (chi-square, 6 dof):
+  // its windows would miss true partners. And the direction's error of the fits that hold.
+  struct Tally {
+    int confident_and_wrong = 0, held = 0;
+    double angle_sum = 0.0;
+  } with, without;
+  auto tally = [&](const MotionRefit& r, Tally* t) {
+    if (!r.ok) return;
+    ++t->held;
+    const Eigen::Vector3d got = r.motion.cam_b_from_cam_a.translation;
+    t->angle_sum += std::acos(std::min(1.0, got.normalized().dot(t_true.normalized())));
+    Eigen::Matrix<double, 6, 1> e;
+    e.head<3>() = LogSO3(truth.rotation * r.motion.cam_b_from_cam_a.rotation.inverse());
+    e.tail<3>() = t_true - got;
+    t->confident_and_wrong += e.dot(r.motion.covariance.ldlt().solve(e)) > 22.46 ? 1 : 0;
+  };
+  constexpr int kScenes = 40;
+  for (int scene = 0; scene < kScenes; ++scene) {
+    std::mt19937_64 rng(static_cast<uint64_t>(100 + scene));
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    std::normal_distribution<double> gauss(0.0, 0.8);
+    std::vector<cv::KeyPoint> ka, kb;
+    std::vector<Match> matches;
+    while (matches.size() < 200) {
+      const bool near = matches.size() % 4 == 0;
+      const Eigen::Vector2d uv(20 + 600 * u(rng), near ? 300 + 160 * u(rng) : 20 + 440 * u(rng));
+      const double z = near ? 0.3 + 0.5 * u(rng) : 8.0 + 4.0 * u(rng);
+      const Eigen::Vector3d q = truth * c.Unproject(uv, z);
+      Eigen::Vector2d pb(c.fx * q.x() / q.z() + c.cx + gauss(rng),
+                         c.fy * q.y() / q.z() + c.cy + gauss(rng));
+      if (u(rng) < 0.2) {
+        const double a = 2.0 * M_PI * u(rng), d = 3.0 + 12.0 * u(rng);
+        pb += d * Eigen::Vector2d(std::cos(a), std::sin(a));
+      }
+      if (pb.x() < 0 || pb.x() >= c.width || pb.y() < 0 || pb.y() >= c.height) continue;
+      Match m;
+      m.query_idx = static_cast<int>(ka.size());
+      m.train_idx = static_cast<int>(kb.size());
+      ka.emplace_back(static_cast<float>(uv.x()), static_cast<float>(uv.y()), 7.0f);
+      kb.emplace_back(static_cast<float>(pb.x()), static_cast<float>(pb.y()), 7.0f);
+      matches.push_back(m);
+    }
+    tally(RefitMotion(prior, matches, ka, kb, {}, PredictionOptions(), und, MotionRefitOptions()),
+          &with);
+    tally(RefitMotion(prior, matches, ka, kb, {}, PredictionOptions(), und, one_start), &without);
+  }
+  std::printf(
+      "of %d scenes: fits held %d -> %d, sure and wrong %d -> %d, mean direction error "
+      "%.1f -> %.1f deg\n",
+      kScenes, without.held, with.held, without.confident_and_wrong, with.confident_and_wrong,
+      without.angle_sum / std::max(1, without.held) * 180 / M_PI,
+      with.angle_sum / std::max(1, with.held) * 180 / M_PI);
+  // Measured: held 24 -> 39, sure and wrong 23 of 24 -> 17 of 39, direction error 40.7 -> 11.1
+  // deg. The fits still claim too much certainty (the epipolar rows of points with parallax
+  // below the noise count as information): a known limit.
+  ASSERT_GT(without.held, 0);
+  ASSERT_GT(with.held, 0);
+  EXPECT_GE(with.held, without.held + kScenes / 4);
+  EXPECT_LT(static_cast<double>(with.confident_and_wrong) / with.held,
+            0.6 * without.confident_and_wrong / without.held);
+  EXPECT_LT(with.angle_sum / with.held, 0.5 * without.angle_sum / without.held);
+
+  MotionRefitOptions bad;
+  bad.direction_hypotheses = -1;
+  EXPECT_THROW(bad.Check(), InvalidArgument);
+}
 }  // namespace
 }  // namespace imumatch
 
