@@ -31,6 +31,227 @@ Eigen::Vector3d Bearing(const PinholeCamera& camera, const Eigen::Vector2d& idea
   return camera.IdealToNormalized(ideal).homogeneous();
 }
 
+// A match as bearings (z = 1) in A and B, and the depth in A (NaN: none).
+struct Correspondence {
+  Eigen::Vector3d xa, xb;
+  double z;
+};
+
+// Gauss-Newton from the prior's rotation and translation t_from (see RefitMotion).
+MotionRefit SolveFrom(const Eigen::Vector3d& t_from, const std::vector<Correspondence>& cs,
+                      const MotionRefit& base, const Eigen::Matrix3d& r_prior,
+                      const Eigen::Vector3d& t_prior, const Eigen::Matrix<double, 6, 6>& prior_cov,
+                      const Eigen::Matrix<double, 6, 6>& prior_info, double f,
+                      const PredictionOptions& prediction, const MotionRefitOptions& options) {
+  MotionRefit out = base;
+  Eigen::Matrix3d r = r_prior;
+  Eigen::Vector3d t = t_from;
+  auto from_prior = [&] {
+    Eigen::Matrix<double, 6, 1> d;
+    d.head<3>() = LogSO3(Eigen::Quaterniond(r * r_prior.transpose()));
+    d.tail<3>() = t - t_prior;
+    return d;
+  };
+
+  double sigma = options.min_residual_px;
+  // One correspondence's residual (ideal px) and its Jacobian; rows 0 when it has none (behind
+  // camera B, or B's bearing on the epipole).
+  struct Row {
+    Eigen::Matrix<double, 2, 6> j;
+    Eigen::Vector2d e;
+    int rows;  // 2: reprojection; 1: epipolar (e[1] and j's second row zero); 0: none
+  };
+  auto residual = [&](const Correspondence& c, Row& row) {
+    row.rows = 0;
+    const Eigen::Vector3d ra = r * c.xa;
+    if (std::isfinite(c.z)) {
+      const Eigen::Vector3d pr = ra * c.z;
+      const Eigen::Vector3d q = pr + t;
+      if (!(q.z() > 1e-6)) return;
+      row.e = Eigen::Vector2d(f * (q.x() / q.z() - c.xb.x()), f * (q.y() / q.z() - c.xb.y()));
+      Eigen::Matrix<double, 2, 3> dpi;
+      dpi << f / q.z(), 0.0, -f * q.x() / (q.z() * q.z()), 0.0, f / q.z(),
+          -f * q.y() / (q.z() * q.z());
+      // dq / d(dtheta) = -Hat(R p), dq / d(dt) = I; a row a of dpi gives -a Hat(p) = -(a x p)^T.
+      row.j.block<1, 3>(0, 0) = -dpi.row(0).cross(pr.transpose());
+      row.j.block<1, 3>(1, 0) = -dpi.row(1).cross(pr.transpose());
+      row.j.rightCols<3>() = dpi;
+      row.rows = 2;
+      return;
+    }
+    // Epipolar line l = t x R x_a in B; e = f (x_b . l) / |(l_x, l_y)|.
+    const Eigen::Vector3d l = t.cross(ra);
+    const double n = std::sqrt(l.x() * l.x() + l.y() * l.y());
+    if (!(n > 1e-12)) return;
+    row.e = Eigen::Vector2d(f * c.xb.dot(l) / n, 0.0);
+    // de / dl = f / n (x_b - (x_b . l) / n^2 (l_x, l_y, 0)): zero along l, so e does not change
+    // with t's length. dl / d(dtheta) = -Hat(t) Hat(R x_a), dl / d(dt) = -Hat(R x_a).
+    const Eigen::RowVector3d de_dl =
+        (f / n) *
+        (c.xb.transpose() - (c.xb.dot(l) / (n * n)) * Eigen::RowVector3d(l.x(), l.y(), 0.0));
+    // a Hat(v) = (a x v)^T for a row a: -a Hat(t) Hat(ra) = -((a x t) x ra)^T.
+    row.j.setZero();
+    row.j.block<1, 3>(0, 0) = -(de_dl.cross(t.transpose())).cross(ra.transpose());
+    row.j.block<1, 3>(0, 3) = -de_dl.cross(ra.transpose());
+    row.rows = 1;
+  };
+
+  // Per iteration: every residual and Jacobian once; while reweighting, their robust sigma and
+  // Cauchy weights; then the normal equations of the weighted residuals and the prior.
+  // Reweighting every step converges only linearly (about halving the error per step on MH_05),
+  // so the sigma and the weights are kept once the sigma settles (or after
+  // options.reweight_steps): Gauss-Newton on the fixed weighted problem then converges in a few.
+  // Cauchy weight of a row at squared scale c2 (per residual row).
+  auto cauchy_weight = [](const Row& row, double c2) {
+    return 1.0 / (1.0 + row.e.squaredNorm() / (row.rows * c2));
+  };
+  std::vector<Row> rs(cs.size());
+  std::vector<double> weight(cs.size(), 0.0);
+  std::vector<double> abs_rows;
+  abs_rows.reserve(2 * cs.size());
+  Eigen::Matrix<double, 6, 6> info = Eigen::Matrix<double, 6, 6>::Zero();
+  double last_step2 = std::numeric_limits<double>::infinity();  // squared, in the fit's sigmas
+  bool reweight = true;
+  for (int iteration = 0; iteration <= options.iterations; ++iteration) {
+    // Reweight until the sigma settles (within 1 % of the previous step's) or reweight_steps.
+    reweight = reweight && iteration < options.reweight_steps;
+    abs_rows.clear();
+    for (size_t i = 0; i < cs.size(); ++i) {
+      Row& row = rs[i];
+      residual(cs[i], row);
+      if (row.rows == 0) continue;
+      abs_rows.push_back(std::fabs(row.e[0]));
+      if (row.rows == 2) abs_rows.push_back(std::fabs(row.e[1]));
+    }
+    if (abs_rows.empty()) break;
+    bool reweighted = false;
+    if (reweight) {
+      const auto mid = abs_rows.begin() + static_cast<std::ptrdiff_t>(abs_rows.size() / 2);
+      std::nth_element(abs_rows.begin(), mid, abs_rows.end());
+      const double next = std::max(1.4826 * *mid, options.min_residual_px);
+      reweight = iteration == 0 || std::fabs(next - sigma) > 0.01 * sigma;
+      reweighted = true;
+      sigma = next;
+    }
+    const double c2 = options.cauchy_scale * options.cauchy_scale * sigma * sigma;
+    const double inlier2 = options.inlier_sigmas * options.inlier_sigmas * sigma * sigma;
+    Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
+    out.inliers = 0;
+    for (size_t i = 0; i < cs.size(); ++i) {
+      const Row& row = rs[i];
+      if (row.rows == 0) continue;
+      const double e2 = row.e.squaredNorm();
+      out.inliers += e2 <= inlier2 * row.rows ? 1 : 0;
+      if (reweighted) weight[i] = cauchy_weight(row, c2);
+      h.noalias() += weight[i] * row.j.transpose() * row.j;
+      g.noalias() += weight[i] * row.j.transpose() * row.e;
+    }
+    info = h / (sigma * sigma);
+    if (iteration == options.iterations) break;  // the last pass only evaluates
+    ++out.iterations;
+    const Eigen::Matrix<double, 6, 1> step =
+        -(prior_info + info).ldlt().solve(prior_info * from_prior() + g / (sigma * sigma));
+    if (!step.allFinite()) break;
+    r = ExpSO3(step.head<3>()).toRotationMatrix() * r;
+    t += step.tail<3>();
+    // Converged: the step is below a tenth of the fit's own standard deviation (the windows
+    // around the predictions are at least the keypoints' noise, far wider).
+    last_step2 = step.dot((prior_info + info) * step);
+    if (!reweighted && last_step2 < 1e-2) {
+      iteration = options.iterations - 1;  // one more pass to evaluate at the final motion
+    }
+  }
+  out.sigma_px = sigma;
+  if (!abs_rows.empty()) {  // the last pass's residuals, at the final motion
+    const auto mid = abs_rows.begin() + static_cast<std::ptrdiff_t>(abs_rows.size() / 2);
+    std::nth_element(abs_rows.begin(), mid, abs_rows.end());
+    out.median_residual_px = *mid;
+  }
+  const Eigen::Matrix<double, 6, 1> d = from_prior();
+  out.mahalanobis2 = d.dot(prior_info * d);
+  if (out.inliers < options.min_inliers) {
+    out.reason = "motion fit: " + std::to_string(out.inliers) + " inliers";
+    return out;
+  }
+  // The windows assume the keypoints' localisation noise in both frames (sqrt(2) x
+  // keypoint_sigma_px per axis, before the size scaling): residuals beyond it mean the motion
+  // does not explain the pair (a moving object, a wrong depth map, two motions) and the IMU's
+  // wider windows stand.
+  const double noise_px = std::sqrt(2.0) * prediction.keypoint_sigma_px;
+  if (!(sigma <= noise_px)) {
+    out.reason = "motion fit: residuals (robust sigma " + std::to_string(sigma) +
+                 " px) beyond the keypoints' noise (" + std::to_string(noise_px) + " px)";
+    return out;
+  }
+  // Not converged: the last step was more than the fit's own standard deviation, so the windows
+  // would be centred farther from the optimum than their motion part is wide.
+  if (!(last_step2 <= 1.0)) {
+    out.reason = "motion fit: not converged in " + std::to_string(options.iterations) + " steps";
+    return out;
+  }
+  const double gate = ChiSquare6Quantile(options.agreement_probability);
+  if (!(out.mahalanobis2 <= gate) || !r.allFinite() || !t.allFinite()) {
+    out.disagrees = true;
+    out.reason = "the fit disagrees with the prior motion (squared Mahalanobis distance " +
+                 std::to_string(out.mahalanobis2) + " > " + std::to_string(gate) + ")";
+    return out;
+  }
+  Eigen::Matrix<double, 6, 6> cov = (prior_info + info).inverse();
+  out.ok = cov.allFinite();
+  if (!out.ok) {
+    out.reason = "motion fit: singular information";
+    return out;
+  }
+  out.motion.cam_b_from_cam_a = Rigid3d(Eigen::Quaterniond(r).normalized(), t);
+  out.motion.covariance = 0.5 * (cov + cov.transpose());
+  if (!options.measure_rotation) return out;
+
+  // The rotation the matches alone measure, for a gyro bias filter (ImuRotationFromFit): the
+  // same residuals from the fit on, with the prior's translation information only (the epipolar
+  // residuals do not see the translation's length) and the Cauchy weights recomputed every step
+  // (iteratively reweighted least squares at the fit's sigma). Weights kept from the fit would be
+  // those of a motion the prior pulled: on 40 scenes with a prior 3 sigma off in rotation, one
+  // step from the fit with its weights kept 9 % of the prior's offset.
+  Eigen::Matrix<double, 6, 6> translation_info = Eigen::Matrix<double, 6, 6>::Zero();
+  translation_info.bottomRightCorner<3, 3>() = prior_cov.bottomRightCorner<3, 3>().inverse();
+  const double c2 = options.cauchy_scale * options.cauchy_scale * sigma * sigma;
+  Eigen::Matrix<double, 6, 6> alone = Eigen::Matrix<double, 6, 6>::Zero();
+  bool converged = false;
+  for (int iteration = 0; iteration < 3 * options.iterations && !converged; ++iteration) {
+    Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
+    for (size_t i = 0; i < cs.size(); ++i) {
+      Row& row = rs[i];
+      residual(cs[i], row);
+      if (row.rows == 0) continue;
+      const double w = cauchy_weight(row, c2);
+      h.noalias() += w * row.j.transpose() * row.j;
+      g.noalias() += w * row.j.transpose() * row.e;
+    }
+    alone = translation_info + h / (sigma * sigma);
+    const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(alone);
+    if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) break;
+    const Eigen::Matrix<double, 6, 1> step =
+        -ldlt.solve(translation_info * from_prior() + g / (sigma * sigma));
+    if (!step.allFinite()) break;
+    r = ExpSO3(step.head<3>()).toRotationMatrix() * r;
+    t += step.tail<3>();
+    converged = step.dot(alone * step) < 1e-4;  // a hundredth of its own sigma
+  }
+  if (converged) {
+    const Eigen::Matrix<double, 6, 6> alone_cov = alone.inverse();
+    const Eigen::Matrix3d cov_theta =
+        0.5 * (alone_cov.topLeftCorner<3, 3>() + alone_cov.topLeftCorner<3, 3>().transpose());
+    if (cov_theta.allFinite() && Eigen::LLT<Eigen::Matrix3d>(cov_theta).info() == Eigen::Success) {
+      out.rotation_from_matches_ok = true;
+      out.rotation_from_matches = Eigen::Quaterniond(r).normalized();
+      out.rotation_from_matches_covariance = cov_theta;
+    }
+  }
+  return out;
+}
+
 // Of two fits of the same matches from different starts: one that holds beats one that does not;
 // of two that hold, the one whose residuals are smaller (median, by more than 1 %), else the
 // one nearer the prior.
@@ -93,10 +314,6 @@ MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& mat
   const double f = 0.5 * (camera.fx + camera.fy);
 
   // Bearings (z = 1) in A and B; the depth in A (NaN: none).
-  struct Correspondence {
-    Eigen::Vector3d xa, xb;
-    double z;
-  };
   std::vector<Correspondence> cs;
   cs.reserve(matches.size());
   for (const Match& m : matches) {
@@ -170,214 +387,8 @@ MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& mat
   }
 
   auto solve = [&](const Eigen::Vector3d& t_from) {
-    MotionRefit out = base;
-    Eigen::Matrix3d r = r_prior;
-    Eigen::Vector3d t = t_from;
-    auto from_prior = [&] {
-      Eigen::Matrix<double, 6, 1> d;
-      d.head<3>() = LogSO3(Eigen::Quaterniond(r * r_prior.transpose()));
-      d.tail<3>() = t - t_prior;
-      return d;
-    };
-
-    double sigma = options.min_residual_px;
-    // One correspondence's residual (ideal px) and its Jacobian; rows 0 when it has none (behind
-    // camera B, or B's bearing on the epipole).
-    struct Row {
-      Eigen::Matrix<double, 2, 6> j;
-      Eigen::Vector2d e;
-      int rows;  // 2: reprojection; 1: epipolar (e[1] and j's second row zero); 0: none
-    };
-    auto residual = [&](const Correspondence& c, Row& row) {
-      row.rows = 0;
-      const Eigen::Vector3d ra = r * c.xa;
-      if (std::isfinite(c.z)) {
-        const Eigen::Vector3d pr = ra * c.z;
-        const Eigen::Vector3d q = pr + t;
-        if (!(q.z() > 1e-6)) return;
-        row.e = Eigen::Vector2d(f * (q.x() / q.z() - c.xb.x()), f * (q.y() / q.z() - c.xb.y()));
-        Eigen::Matrix<double, 2, 3> dpi;
-        dpi << f / q.z(), 0.0, -f * q.x() / (q.z() * q.z()), 0.0, f / q.z(),
-            -f * q.y() / (q.z() * q.z());
-        // dq / d(dtheta) = -Hat(R p), dq / d(dt) = I; a row a of dpi gives -a Hat(p) = -(a x p)^T.
-        row.j.block<1, 3>(0, 0) = -dpi.row(0).cross(pr.transpose());
-        row.j.block<1, 3>(1, 0) = -dpi.row(1).cross(pr.transpose());
-        row.j.rightCols<3>() = dpi;
-        row.rows = 2;
-        return;
-      }
-      // Epipolar line l = t x R x_a in B; e = f (x_b . l) / |(l_x, l_y)|.
-      const Eigen::Vector3d l = t.cross(ra);
-      const double n = std::sqrt(l.x() * l.x() + l.y() * l.y());
-      if (!(n > 1e-12)) return;
-      row.e = Eigen::Vector2d(f * c.xb.dot(l) / n, 0.0);
-      // de / dl = f / n (x_b - (x_b . l) / n^2 (l_x, l_y, 0)): zero along l, so e does not change
-      // with t's length. dl / d(dtheta) = -Hat(t) Hat(R x_a), dl / d(dt) = -Hat(R x_a).
-      const Eigen::RowVector3d de_dl =
-          (f / n) *
-          (c.xb.transpose() - (c.xb.dot(l) / (n * n)) * Eigen::RowVector3d(l.x(), l.y(), 0.0));
-      // a Hat(v) = (a x v)^T for a row a: -a Hat(t) Hat(ra) = -((a x t) x ra)^T.
-      row.j.setZero();
-      row.j.block<1, 3>(0, 0) = -(de_dl.cross(t.transpose())).cross(ra.transpose());
-      row.j.block<1, 3>(0, 3) = -de_dl.cross(ra.transpose());
-      row.rows = 1;
-    };
-
-    // Per iteration: every residual and Jacobian once; while reweighting, their robust sigma and
-    // Cauchy weights; then the normal equations of the weighted residuals and the prior.
-    // Reweighting every step converges only linearly (about halving the error per step on MH_05),
-    // so the sigma and the weights are kept once the sigma settles (or after
-    // options.reweight_steps): Gauss-Newton on the fixed weighted problem then converges in a few.
-    // Cauchy weight of a row at squared scale c2 (per residual row).
-    auto cauchy_weight = [](const Row& row, double c2) {
-      return 1.0 / (1.0 + row.e.squaredNorm() / (row.rows * c2));
-    };
-    std::vector<Row> rs(cs.size());
-    std::vector<double> weight(cs.size(), 0.0);
-    std::vector<double> abs_rows;
-    abs_rows.reserve(2 * cs.size());
-    Eigen::Matrix<double, 6, 6> info = Eigen::Matrix<double, 6, 6>::Zero();
-    double last_step2 = std::numeric_limits<double>::infinity();  // squared, in the fit's sigmas
-    bool reweight = true;
-    for (int iteration = 0; iteration <= options.iterations; ++iteration) {
-      // Reweight until the sigma settles (within 1 % of the previous step's) or reweight_steps.
-      reweight = reweight && iteration < options.reweight_steps;
-      abs_rows.clear();
-      for (size_t i = 0; i < cs.size(); ++i) {
-        Row& row = rs[i];
-        residual(cs[i], row);
-        if (row.rows == 0) continue;
-        abs_rows.push_back(std::fabs(row.e[0]));
-        if (row.rows == 2) abs_rows.push_back(std::fabs(row.e[1]));
-      }
-      if (abs_rows.empty()) break;
-      bool reweighted = false;
-      if (reweight) {
-        const auto mid = abs_rows.begin() + static_cast<std::ptrdiff_t>(abs_rows.size() / 2);
-        std::nth_element(abs_rows.begin(), mid, abs_rows.end());
-        const double next = std::max(1.4826 * *mid, options.min_residual_px);
-        reweight = iteration == 0 || std::fabs(next - sigma) > 0.01 * sigma;
-        reweighted = true;
-        sigma = next;
-      }
-      const double c2 = options.cauchy_scale * options.cauchy_scale * sigma * sigma;
-      const double inlier2 = options.inlier_sigmas * options.inlier_sigmas * sigma * sigma;
-      Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
-      Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
-      out.inliers = 0;
-      for (size_t i = 0; i < cs.size(); ++i) {
-        const Row& row = rs[i];
-        if (row.rows == 0) continue;
-        const double e2 = row.e.squaredNorm();
-        out.inliers += e2 <= inlier2 * row.rows ? 1 : 0;
-        if (reweighted) weight[i] = cauchy_weight(row, c2);
-        h.noalias() += weight[i] * row.j.transpose() * row.j;
-        g.noalias() += weight[i] * row.j.transpose() * row.e;
-      }
-      info = h / (sigma * sigma);
-      if (iteration == options.iterations) break;  // the last pass only evaluates
-      ++out.iterations;
-      const Eigen::Matrix<double, 6, 1> step =
-          -(prior_info + info).ldlt().solve(prior_info * from_prior() + g / (sigma * sigma));
-      if (!step.allFinite()) break;
-      r = ExpSO3(step.head<3>()).toRotationMatrix() * r;
-      t += step.tail<3>();
-      // Converged: the step is below a tenth of the fit's own standard deviation (the windows
-      // around the predictions are at least the keypoints' noise, far wider).
-      last_step2 = step.dot((prior_info + info) * step);
-      if (!reweighted && last_step2 < 1e-2) {
-        iteration = options.iterations - 1;  // one more pass to evaluate at the final motion
-      }
-    }
-    out.sigma_px = sigma;
-    if (!abs_rows.empty()) {  // the last pass's residuals, at the final motion
-      const auto mid = abs_rows.begin() + static_cast<std::ptrdiff_t>(abs_rows.size() / 2);
-      std::nth_element(abs_rows.begin(), mid, abs_rows.end());
-      out.median_residual_px = *mid;
-    }
-    const Eigen::Matrix<double, 6, 1> d = from_prior();
-    out.mahalanobis2 = d.dot(prior_info * d);
-    if (out.inliers < options.min_inliers) {
-      out.reason = "motion fit: " + std::to_string(out.inliers) + " inliers";
-      return out;
-    }
-    // The windows assume the keypoints' localisation noise in both frames (sqrt(2) x
-    // keypoint_sigma_px per axis, before the size scaling): residuals beyond it mean the motion
-    // does not explain the pair (a moving object, a wrong depth map, two motions) and the IMU's
-    // wider windows stand.
-    const double noise_px = std::sqrt(2.0) * prediction.keypoint_sigma_px;
-    if (!(sigma <= noise_px)) {
-      out.reason = "motion fit: residuals (robust sigma " + std::to_string(sigma) +
-                   " px) beyond the keypoints' noise (" + std::to_string(noise_px) + " px)";
-      return out;
-    }
-    // Not converged: the last step was more than the fit's own standard deviation, so the windows
-    // would be centred farther from the optimum than their motion part is wide.
-    if (!(last_step2 <= 1.0)) {
-      out.reason = "motion fit: not converged in " + std::to_string(options.iterations) + " steps";
-      return out;
-    }
-    const double gate = ChiSquare6Quantile(options.agreement_probability);
-    if (!(out.mahalanobis2 <= gate) || !r.allFinite() || !t.allFinite()) {
-      out.disagrees = true;
-      out.reason = "the fit disagrees with the prior motion (squared Mahalanobis distance " +
-                   std::to_string(out.mahalanobis2) + " > " + std::to_string(gate) + ")";
-      return out;
-    }
-    Eigen::Matrix<double, 6, 6> cov = (prior_info + info).inverse();
-    out.ok = cov.allFinite();
-    if (!out.ok) {
-      out.reason = "motion fit: singular information";
-      return out;
-    }
-    out.motion.cam_b_from_cam_a = Rigid3d(Eigen::Quaterniond(r).normalized(), t);
-    out.motion.covariance = 0.5 * (cov + cov.transpose());
-    if (!options.measure_rotation) return out;
-
-    // The rotation the matches alone measure, for a gyro bias filter (ImuRotationFromFit): the
-    // same residuals from the fit on, with the prior's translation information only (the epipolar
-    // residuals do not see the translation's length) and the Cauchy weights recomputed every step
-    // (iteratively reweighted least squares at the fit's sigma). Weights kept from the fit would be
-    // those of a motion the prior pulled: on 40 scenes with a prior 3 sigma off in rotation, one
-    // step from the fit with its weights kept 9 % of the prior's offset.
-    Eigen::Matrix<double, 6, 6> translation_info = Eigen::Matrix<double, 6, 6>::Zero();
-    translation_info.bottomRightCorner<3, 3>() = prior_cov.bottomRightCorner<3, 3>().inverse();
-    const double c2 = options.cauchy_scale * options.cauchy_scale * sigma * sigma;
-    Eigen::Matrix<double, 6, 6> alone = Eigen::Matrix<double, 6, 6>::Zero();
-    bool converged = false;
-    for (int iteration = 0; iteration < 3 * options.iterations && !converged; ++iteration) {
-      Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
-      Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
-      for (size_t i = 0; i < cs.size(); ++i) {
-        Row& row = rs[i];
-        residual(cs[i], row);
-        if (row.rows == 0) continue;
-        const double w = cauchy_weight(row, c2);
-        h.noalias() += w * row.j.transpose() * row.j;
-        g.noalias() += w * row.j.transpose() * row.e;
-      }
-      alone = translation_info + h / (sigma * sigma);
-      const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(alone);
-      if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) break;
-      const Eigen::Matrix<double, 6, 1> step =
-          -ldlt.solve(translation_info * from_prior() + g / (sigma * sigma));
-      if (!step.allFinite()) break;
-      r = ExpSO3(step.head<3>()).toRotationMatrix() * r;
-      t += step.tail<3>();
-      converged = step.dot(alone * step) < 1e-4;  // a hundredth of its own sigma
-    }
-    if (converged) {
-      const Eigen::Matrix<double, 6, 6> alone_cov = alone.inverse();
-      const Eigen::Matrix3d cov_theta =
-          0.5 * (alone_cov.topLeftCorner<3, 3>() + alone_cov.topLeftCorner<3, 3>().transpose());
-      if (cov_theta.allFinite() &&
-          Eigen::LLT<Eigen::Matrix3d>(cov_theta).info() == Eigen::Success) {
-        out.rotation_from_matches_ok = true;
-        out.rotation_from_matches = Eigen::Quaterniond(r).normalized();
-        out.rotation_from_matches_covariance = cov_theta;
-      }
-    }
-    return out;
+    return SolveFrom(t_from, cs, base, r_prior, t_prior, prior_cov, prior_info, f, prediction,
+                     options);
   };
   MotionRefit first = solve(t_start);
   if (second_start) {
