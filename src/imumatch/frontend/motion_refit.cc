@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <utility>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -29,6 +28,13 @@ double ChiSquare6Quantile(double p) {
 // The ray of an ideal pixel, at z = 1.
 Eigen::Vector3d Bearing(const PinholeCamera& camera, const Eigen::Vector2d& ideal) {
   return camera.IdealToNormalized(ideal).homogeneous();
+}
+
+// The upper median of v (reordered; v not empty).
+double UpperMedian(std::vector<double>& v) {
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
 }
 
 // A match as bearings (z = 1) in A and B, and the depth in A (NaN: none).
@@ -126,9 +132,7 @@ MotionRefit SolveFrom(const Eigen::Vector3d& t_from, const std::vector<Correspon
     if (abs_rows.empty()) break;
     bool reweighted = false;
     if (reweight) {
-      const auto mid = abs_rows.begin() + static_cast<std::ptrdiff_t>(abs_rows.size() / 2);
-      std::nth_element(abs_rows.begin(), mid, abs_rows.end());
-      const double next = std::max(1.4826 * *mid, options.min_residual_px);
+      const double next = std::max(1.4826 * UpperMedian(abs_rows), options.min_residual_px);
       reweight = iteration == 0 || std::fabs(next - sigma) > 0.01 * sigma;
       reweighted = true;
       sigma = next;
@@ -163,11 +167,8 @@ MotionRefit SolveFrom(const Eigen::Vector3d& t_from, const std::vector<Correspon
     }
   }
   out.sigma_px = sigma;
-  if (!abs_rows.empty()) {  // the last pass's residuals, at the final motion
-    const auto mid = abs_rows.begin() + static_cast<std::ptrdiff_t>(abs_rows.size() / 2);
-    std::nth_element(abs_rows.begin(), mid, abs_rows.end());
-    out.median_residual_px = *mid;
-  }
+  // The last pass's residuals, at the final motion.
+  if (!abs_rows.empty()) out.median_residual_px = UpperMedian(abs_rows);
   const Eigen::Matrix<double, 6, 1> d = from_prior();
   out.mahalanobis2 = d.dot(prior_info * d);
   if (out.inliers < options.min_inliers) {
@@ -352,13 +353,13 @@ MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& mat
   const Eigen::Vector3d& t_prior = prior.cam_b_from_cam_a.translation;
   // Start: the prior's rotation and length, and the translation direction the epipolar
   // constraints favour when it explains the matches better than the prior's (a translation
-  // under 1 mm has no direction to estimate). A second start from StartTranslation when its
-  // direction differs (by more than a degree) and explains the matches better than where the fit
-  // from the first ended: then the fit runs again from it and the better fit is kept
+  // under 1 mm has no direction to estimate). A second start from SearchTranslationDirection when
+  // its direction differs (by more than a degree) and explains the matches better than where the
+  // fit from the first ended: then the fit runs again from it and the better fit is kept
   // (FitIsBetter).
   Eigen::Vector3d t_start = t_prior;
-  bool second_start = false;
-  Eigen::Vector3d t_second = t_prior;
+  bool second_start = false;  // a searched start that differs from t_start
+  TranslationSearchResult searched{t_prior, 0.0};
   std::vector<Eigen::Vector3d> ra_prior, xb_all;  // R_prior x_a, x_b
   double start_sigma = options.min_residual_px;
   if (t_prior.norm() >= 1e-3) {
@@ -379,10 +380,11 @@ MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& mat
     }
     if (options.direction_hypotheses > 0) {
       start_sigma = std::max(options.min_residual_px, 1.4826 * start_median);
-      t_second = SearchTranslationDirection(
+      searched = SearchTranslationDirection(
           ra_prior, xb_all, t_start, t_prior, prior_info.bottomRightCorner<3, 3>(), f, start_sigma,
           options.cauchy_scale, options.direction_hypotheses, scratch);
-      second_start = t_second.normalized().dot(t_start.normalized()) < std::cos(1.0 * M_PI / 180.0);
+      second_start = searched.translation.normalized().dot(t_start.normalized()) <
+                     std::cos(1.0 * M_PI / 180.0);
     }
   }
 
@@ -391,20 +393,14 @@ MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& mat
                      options);
   };
   MotionRefit first = solve(t_start);
-  if (second_start) {
-    // The first fit's direction at the prior's length, under the same cost: when the second start
-    // explains the matches better, the first fit settled in a wrong minimum.
-    const double length = t_prior.norm();
-    const Eigen::Matrix3d t_info = prior_info.bottomRightCorner<3, 3>();
-    const double cost_first = TranslationDirectionCost(
-        ra_prior, xb_all, length * first.motion.cam_b_from_cam_a.translation.normalized(), f,
-        start_sigma, options.cauchy_scale, t_prior, t_info);
-    const double cost_second = TranslationDirectionCost(ra_prior, xb_all, t_second, f, start_sigma,
-                                                        options.cauchy_scale, t_prior, t_info);
-    second_start = cost_second < cost_first;
-  }
   if (!second_start) return first;
-  MotionRefit second = solve(t_second);
+  // The first fit's direction at the prior's length, under the search's cost: when the searched
+  // start explains the matches better, the first fit settled in a wrong minimum.
+  const double cost_first = TranslationDirectionCost(
+      ra_prior, xb_all, t_prior.norm() * first.motion.cam_b_from_cam_a.translation.normalized(), f,
+      start_sigma, options.cauchy_scale, t_prior, prior_info.bottomRightCorner<3, 3>());
+  if (!(searched.cost < cost_first)) return first;
+  MotionRefit second = solve(searched.translation);
   return FitIsBetter(second, first) ? second : first;
 }
 

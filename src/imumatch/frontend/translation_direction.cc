@@ -73,7 +73,7 @@ double TranslationDirectionCost(const std::vector<Eigen::Vector3d>& ra,
   return 0.5 * cauchy_scale * cauchy_scale * cost + 0.5 * d.dot(t_info * d);
 }
 
-Eigen::Vector3d SearchTranslationDirection(
+TranslationSearchResult SearchTranslationDirection(
     const std::vector<Eigen::Vector3d>& ra, const std::vector<Eigen::Vector3d>& xb,
     const Eigen::Vector3d& start, const Eigen::Vector3d& t_prior, const Eigen::Matrix3d& t_info,
     double f, double sigma, double cauchy_scale, int hypotheses, std::vector<double>& scratch) {
@@ -108,8 +108,8 @@ Eigen::Vector3d SearchTranslationDirection(
     order[i] = static_cast<int>(i);
     normal[i] = ra[i].cross(xb[i]);
   }
-  const int pool = std::max(2, static_cast<int>(ra.size()) / 2);
-  if (static_cast<int>(ra.size()) >= pool) {
+  if (ra.size() >= 2) {
+    const int pool = std::max(2, static_cast<int>(ra.size()) / 2);
     std::nth_element(order.begin(), order.begin() + (pool - 1), order.end(), [&](int a, int b) {
       return normal[a].squaredNorm() > normal[b].squaredNorm();
     });
@@ -129,8 +129,8 @@ Eigen::Vector3d SearchTranslationDirection(
       consider(dir.dot(t_prior) < 0.0 ? Eigen::Vector3d(-dir) : dir);
     }
   }
-  // The few best on the subset, each refined by EpipolarDirection on the subset, against the
-  // start on all correspondences.
+  // The few best on the subset, each refined by EpipolarTranslationDirection on the subset,
+  // against the start on all correspondences.
   auto cost_all = [&](const Eigen::Vector3d& dir) {
     return TranslationDirectionCost(ra, xb, length * dir, f, sigma, cauchy_scale, t_prior, t_info);
   };
@@ -153,7 +153,7 @@ Eigen::Vector3d SearchTranslationDirection(
       }
     }
   }
-  return length * best;
+  return {length * best, best_cost};
 }
 
 }  // namespace imumatch

@@ -43,15 +43,19 @@ double TranslationDirectionCost(const std::vector<Eigen::Vector3d>& ra,
 // (t _|_ R x_a x x_b for both: their cross product), drawn from the half with the largest
 // parallax angle |R x_a x x_b| (a point at infinity says nothing about the direction), the few of
 // least TranslationDirectionCost refined by EpipolarTranslationDirection; the one of least cost
-// (at `sigma`). The epipolar distance
-// is far from linear in the direction: from a prior some tens of degrees off, the reweighted
-// linear solution and Gauss-Newton both settle in a wrong minimum (EuRoC MH_05 at take-off,
-// FAST+BRIEF frames 11 -> 12: a direction 57 degrees off, the true partners' median epipolar
-// distance 2.5 px where the true direction gives 0.7 px).
-Eigen::Vector3d SearchTranslationDirection(
+// (at `sigma`, over all correspondences), with that cost. The epipolar distance is far from
+// linear in the direction: from a prior some tens of degrees off, the reweighted linear solution
+// and Gauss-Newton both settle in a wrong minimum (EuRoC MH_05 at take-off, FAST+BRIEF frames
+// 11 -> 12: a direction 57 degrees off, the true partners' median epipolar distance 2.5 px where
+// the true direction gives 0.7 px). Throws InvalidArgument when ra and xb differ in size or
+// t_prior is shorter than 1e-9.
+struct TranslationSearchResult {
+  Eigen::Vector3d translation;
+  double cost = 0.0;  // its TranslationDirectionCost
+};
+TranslationSearchResult SearchTranslationDirection(
     const std::vector<Eigen::Vector3d>& ra, const std::vector<Eigen::Vector3d>& xb,
     const Eigen::Vector3d& start, const Eigen::Vector3d& t_prior, const Eigen::Matrix3d& t_info,
     double f, double sigma, double cauchy_scale, int hypotheses, std::vector<double>& scratch);
-// (Throws InvalidArgument when ra and xb differ in size or t_prior is shorter than 1e-9.)
 
 }  // namespace imumatch

@@ -62,10 +62,13 @@ TEST(TranslationDirectionTest, ExactCorrespondencesGiveTheTruthAndItsCostIsTheLe
   const Eigen::Matrix3d info = Eigen::Matrix3d::Identity() / (0.03 * 0.03);
   EXPECT_LT(TranslationDirectionCost(b.ra, b.xb, t, kF, 0.5, 2.3849, prior, info),
             TranslationDirectionCost(b.ra, b.xb, prior, kF, 0.5, 2.3849, prior, info));
-  const Eigen::Vector3d found =
+  const TranslationSearchResult search =
       SearchTranslationDirection(b.ra, b.xb, prior, prior, info, kF, 0.5, 2.3849, 48, scratch);
+  const Eigen::Vector3d found = search.translation;
   EXPECT_NEAR(found.norm(), prior.norm(), 1e-12);  // the length stays the prior's
   EXPECT_LT(AngleBetween(found, t), 0.01);
+  EXPECT_DOUBLE_EQ(search.cost,
+                   TranslationDirectionCost(b.ra, b.xb, found, kF, 0.5, 2.3849, prior, info));
   // The linear solution from the prior, for comparison, also finds it on exact data.
   EXPECT_LT(
       AngleBetween(EpipolarTranslationDirection(b.ra, b.xb, prior, kF, 0.5, 2.3849, scratch), t),
