@@ -45,6 +45,14 @@ struct PatchMatchingOptions {
   // the patch alone decides.
   double max_shift_px = 2.0;
   double min_correlation = 0.9;
+  // max_shift_px holds for two keypoints at their frames' finest detection scale. The alignment
+  // lands where B shows A's keypoint; B's keypoint of the same point is off from there by both
+  // keypoints' localisation errors, which grow with the detection scale as the predictor's model
+  // says (KeypointSigmaScaling::kSize: a keypoint at scale s sits on a grid of step s px). On,
+  // the shift limit (and the spacing that makes two passing places distinct) is max_shift_px x
+  // sqrt((f_a^2 + f_b^2) / 2), f = SizeSigmaFactor(size, the frame's smallest size, 1 px): 2 px
+  // for two finest keypoints, 3 px for two of SIFT's octave 2 (s = 4), 5 px at octave 3.
+  bool shift_grows_with_scale = true;
   int max_candidates = 16;  // a query whose window holds more is not looked at
   // Require the candidate to pass the descriptor's distance threshold as well
   // (GuidedMatcherOptions::max_hamming_fraction / max_l2_relative). Off: measured on EuRoC MH_05

@@ -135,6 +135,43 @@ TEST(PatchMatchingTest, TwoPlacesShowingThePatchMatchNeither) {
   EXPECT_GE(st.matched, static_cast<int>(p.kps_a.size()) - 2);
 }
 
+TEST(PatchMatchingTest, TheShiftLimitGrowsWithTheKeypointsScale) {
+  // Every partner sits 3 px below the truth: for two keypoints of the finest scale (size 8, the
+  // frames' smallest) a keypoint that far is another point (limit 2 px); for two found at 8x that
+  // scale it is the rounding of their grid (sigma^2 = 1 + (64 - 1) / 12 px^2 each: limit 5 px).
+  const PatchScene s = MakePatchScene(2.0, Eigen::Vector2f(1.5f, 0.5f));
+  for (const bool grows : {true, false}) {
+    Problem p = MakeProblem(s);
+    const int n = static_cast<int>(p.kps_a.size());
+    for (int i = 0; i < n; ++i) {
+      const bool coarse = i % 2 == 1;
+      cv::KeyPoint& partner = p.kps_b[static_cast<size_t>(2 * i)];
+      partner.pt.y += 3.0f;
+      p.kps_b[static_cast<size_t>(2 * i + 1)].pt.y += 3.0f;  // the decoy keeps its 6 px offset
+      if (coarse) {
+        p.kps_a[static_cast<size_t>(i)].size = 64.0f;
+        partner.size = 64.0f;
+        p.kps_b[static_cast<size_t>(2 * i + 1)].size = 64.0f;
+      }
+    }
+    p.ideal_a = ToKeypointInfos(p.kps_a);
+    p.ideal_b = ToKeypointInfos(p.kps_b);
+    p.grid.Build(p.ideal_b, 320, 240, 8.0f);
+    PatchMatchingOptions o;
+    o.shift_grows_with_scale = grows;
+    const PatchMatchingStats st = MatchAll(p, s, o);
+    EXPECT_EQ(st.ambiguous, 0);
+    int coarse_matched = 0;
+    for (const Match& m : p.result.matches) {
+      ASSERT_EQ(m.query_idx % 2, 1) << "fine query " << m.query_idx << " took a keypoint 3 px off";
+      EXPECT_EQ(m.train_idx, 2 * m.query_idx) << "query " << m.query_idx << " took the decoy";
+      EXPECT_LT((m.refined_uv_b - p.truth[static_cast<size_t>(m.query_idx)]).norm(), 0.1f);
+      ++coarse_matched;
+    }
+    EXPECT_EQ(coarse_matched, grows ? n / 2 : 0) << (grows ? "growing" : "fixed") << " limit";
+  }
+}
+
 TEST(PatchMatchingTest, AnUnrelatedFrameGivesNoMatch) {
   PatchScene s = MakePatchScene(0.0, Eigen::Vector2f(1.0f, 1.0f));
   s.b = Noise(99);

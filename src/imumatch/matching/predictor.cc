@@ -433,20 +433,20 @@ double KeypointSigmaScale(const PredictionOptions& options, const KeypointInfo& 
   switch (options.sigma_scaling) {
     case KeypointSigmaScaling::kNone:
       return 1.0;
-    case KeypointSigmaScaling::kSize: {
-      if (!(keypoint.size > 0.0f && reference_size > 0.0f && options.keypoint_sigma_px > 0.0)) {
-        return 1.0;
-      }
-      // The detector's grid at scale s has a step of s px: rounding to it adds a uniform error of
-      // variance s^2 / 12 per axis to the base sigma (s = 1 adds nothing by definition).
-      const double s = std::max(1.0, static_cast<double>(keypoint.size) / reference_size);
-      const double base2 = options.keypoint_sigma_px * options.keypoint_sigma_px;
-      return std::sqrt(1.0 + (s * s - 1.0) / (12.0 * base2));
-    }
+    case KeypointSigmaScaling::kSize:
+      return SizeSigmaFactor(keypoint.size, reference_size, options.keypoint_sigma_px);
     case KeypointSigmaScaling::kOctave:
       return std::pow(options.octave_scale, static_cast<int8_t>(keypoint.octave & 0xFF));
   }
   return 1.0;
+}
+
+double SizeSigmaFactor(float size, float reference_size, double base_sigma_px) {
+  if (!(size > 0.0f && reference_size > 0.0f && base_sigma_px > 0.0)) return 1.0;
+  // The detector's grid at scale s has a step of s px: rounding to it adds a uniform error of
+  // variance s^2 / 12 per axis to the base sigma (s = 1 adds nothing by definition).
+  const double s = std::max(1.0, static_cast<double>(size) / reference_size);
+  return std::sqrt(1.0 + (s * s - 1.0) / (12.0 * base_sigma_px * base_sigma_px));
 }
 
 void ToIdealKeypointInfos(const std::vector<cv::KeyPoint>& keypoints,

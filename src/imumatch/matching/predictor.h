@@ -280,6 +280,10 @@ float ReferenceKeypointSize(const std::vector<KeypointInfo>& keypoints);
 // The factor on options.keypoint_sigma_px for one keypoint (see KeypointSigmaScaling).
 double KeypointSigmaScale(const PredictionOptions& options, const KeypointInfo& keypoint,
                           float reference_size);
+// The grid-rounding model of KeypointSigmaScaling::kSize: the factor on a base sigma of
+// base_sigma_px for a keypoint of the given size, sqrt(1 + (s^2 - 1) / (12 base^2)) with
+// s = max(1, size / reference_size). 1 when the size, the reference or the base is not positive.
+double SizeSigmaFactor(float size, float reference_size, double base_sigma_px);
 
 // Keypoints in ideal pixels (PredictKeypoints and the guided matcher work in them): positions
 // mapped through the undistorter, angle, size and octave kept.

@@ -458,6 +458,10 @@ TEST(PredictorTest, KeypointNoiseGrowsWithSizeAndTowardsTheLensBorder) {
   EXPECT_FLOAT_EQ(ref, 31.0f);
   EXPECT_DOUBLE_EQ(KeypointSigmaScale(options, kps[1], ref), std::sqrt(1.0 + 15.0 / 12.0));
   EXPECT_DOUBLE_EQ(KeypointSigmaScale(options, kps[0], ref), 1.0);
+  // The same model on another base sigma: a 0.5 px base makes the rounding weigh 4x as much.
+  EXPECT_DOUBLE_EQ(SizeSigmaFactor(124.0f, 31.0f, 0.5), std::sqrt(1.0 + 15.0 / 3.0));
+  EXPECT_DOUBLE_EQ(SizeSigmaFactor(20.0f, 31.0f, 1.0), 1.0);  // below the reference: s = 1
+  EXPECT_DOUBLE_EQ(SizeSigmaFactor(0.0f, 31.0f, 1.0), 1.0);   // no size
   options.sigma_scaling = KeypointSigmaScaling::kNone;
   EXPECT_DOUBLE_EQ(KeypointSigmaScale(options, kps[1], ref), 1.0);
   options.sigma_scaling = KeypointSigmaScaling::kOctave;
