@@ -17,6 +17,7 @@
 
 #include "imumatch/core/error.h"
 #include "imumatch/core/so3.h"
+#include "imumatch/core/statistics.h"
 #include "imumatch/core/time.h"
 #include "imumatch/io/image_io.h"
 #include "imumatch/matching/baseline_matchers.h"
@@ -114,9 +115,7 @@ std::vector<std::string> CheckInputsLookRight(const std::vector<DetectorPairReco
   }
   // Medians in place (the vectors are local copies); -1 when empty.
   auto median = [](auto& v) {
-    if (v.empty()) return -1.0;
-    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-    return static_cast<double>(v[v.size() / 2]);
+    return v.empty() ? -1.0 : static_cast<double>(UpperMedianInPlace(v));
   };
   const double median_residual = residuals.size() >= 20 ? median(residuals) : -1.0;
   const double median_rotation_error = median(rotation_errors);

@@ -8,6 +8,7 @@
 
 #include "imumatch/core/error.h"
 #include "imumatch/core/so3.h"
+#include "imumatch/core/statistics.h"
 #include "imumatch/matching/predictor.h"
 
 namespace imumatch {
@@ -191,17 +192,6 @@ JudgedCounts CountCorrect(const std::vector<MatchResidual>& residuals, double th
   c.wrong = c.matches - c.correct;
   return c;
 }
-
-namespace {
-double Median(std::vector<double> v) {
-  const size_t n = v.size();
-  std::nth_element(v.begin(), v.begin() + static_cast<long>(n / 2), v.end());
-  const double hi = v[n / 2];
-  if (n % 2 == 1) return hi;
-  const double lo = *std::max_element(v.begin(), v.begin() + static_cast<long>(n / 2));
-  return 0.5 * (lo + hi);
-}
-}  // namespace
 
 AutoThreshold ComputeAutoThreshold(const std::vector<float>& depth_residuals_px,
                                    const AutoThresholdOptions& options) {

@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "imumatch/core/error.h"
+#include "imumatch/core/statistics.h"
 #include "imumatch/core/time.h"
 #include "imumatch/imu/imu_integrator.h"
 #include "imumatch/matching/baseline_matchers.h"
@@ -344,12 +345,11 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
   // (the second pass's window and the velocity measurement's weight).
   double fit_angle_sigma = 0.0, fit_translation_sigma = 0.0;
   if (result.pose_from_depth) {
-    std::vector<double> z = depths_used;
-    std::nth_element(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(z.size() / 2), z.end());
+    const double median_depth = UpperMedianInPlace(depths_used);
     const double f = 0.5 * (camera.fx + camera.fy);
     fit_angle_sigma = 2.0 * std::max(result.pose.rms_px, 0.5) / f /
                       std::sqrt(static_cast<double>(result.pose.inliers));
-    fit_translation_sigma = fit_angle_sigma * z[z.size() / 2];
+    fit_translation_sigma = fit_angle_sigma * median_depth;
   }
   result.pose_ms = MsSince(t0);
 

@@ -9,6 +9,7 @@
 
 #include "imumatch/core/error.h"
 #include "imumatch/core/so3.h"
+#include "imumatch/core/statistics.h"
 #include "imumatch/frontend/translation_direction.h"
 
 namespace imumatch {
@@ -28,13 +29,6 @@ double ChiSquare6Quantile(double p) {
 // The ray of an ideal pixel, at z = 1.
 Eigen::Vector3d Bearing(const PinholeCamera& camera, const Eigen::Vector2d& ideal) {
   return camera.IdealToNormalized(ideal).homogeneous();
-}
-
-// The upper median of v (reordered; v not empty).
-double UpperMedian(std::vector<double>& v) {
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
 }
 
 // A match as bearings (z = 1) in A and B, and the depth in A (NaN: none).
@@ -132,7 +126,7 @@ MotionRefit SolveFrom(const Eigen::Vector3d& t_from, const std::vector<Correspon
     if (abs_rows.empty()) break;
     bool reweighted = false;
     if (reweight) {
-      const double next = std::max(1.4826 * UpperMedian(abs_rows), options.min_residual_px);
+      const double next = std::max(1.4826 * UpperMedianInPlace(abs_rows), options.min_residual_px);
       reweight = iteration == 0 || std::fabs(next - sigma) > 0.01 * sigma;
       reweighted = true;
       sigma = next;
@@ -168,7 +162,7 @@ MotionRefit SolveFrom(const Eigen::Vector3d& t_from, const std::vector<Correspon
   }
   out.sigma_px = sigma;
   // The last pass's residuals, at the final motion.
-  if (!abs_rows.empty()) out.median_residual_px = UpperMedian(abs_rows);
+  if (!abs_rows.empty()) out.median_residual_px = UpperMedianInPlace(abs_rows);
   const Eigen::Matrix<double, 6, 1> d = from_prior();
   out.mahalanobis2 = d.dot(prior_info * d);
   if (out.inliers < options.min_inliers) {

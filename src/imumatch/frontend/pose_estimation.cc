@@ -9,6 +9,7 @@
 
 #include "imumatch/core/error.h"
 #include "imumatch/core/so3.h"
+#include "imumatch/core/statistics.h"
 
 namespace imumatch {
 
@@ -162,9 +163,7 @@ PoseFit FitPoseEpipolar(const std::vector<Eigen::Vector2d>& pixels_a,
     }
     if (static_cast<int>(in.size()) < options.min_inliers) break;
     std::vector<double> sorted = resid;
-    std::nth_element(sorted.begin(),
-                     sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
-    const double c = std::max(0.05, 1.5 * sorted[sorted.size() / 2]);
+    const double c = std::max(0.05, 1.5 * UpperMedianInPlace(sorted));
     Eigen::MatrixXd a(in.size(), 3);
     for (size_t k = 0; k < in.size(); ++k) {
       const Eigen::Vector3d line = t.cross(ra[in[k]]);

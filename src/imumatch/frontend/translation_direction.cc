@@ -9,6 +9,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "imumatch/core/error.h"
+#include "imumatch/core/statistics.h"
 
 namespace imumatch {
 
@@ -22,9 +23,7 @@ double MedianEpipolarDistancePx(const std::vector<Eigen::Vector3d>& ra,
     if (n2 > 0.0) scratch.push_back(f * std::fabs(xb[i].dot(l)) / std::sqrt(n2));
   }
   if (scratch.empty()) return std::numeric_limits<double>::infinity();
-  const auto mid = scratch.begin() + static_cast<std::ptrdiff_t>(scratch.size() / 2);
-  std::nth_element(scratch.begin(), mid, scratch.end());
-  return *mid;
+  return UpperMedianInPlace(scratch);
 }
 
 Eigen::Vector3d EpipolarTranslationDirection(const std::vector<Eigen::Vector3d>& ra,
