@@ -142,8 +142,10 @@ MotionRefit SolveFrom(const Eigen::Vector3d& t_from, const std::vector<Correspon
       const double e2 = row.e.squaredNorm();
       out.inliers += e2 <= inlier2 * row.rows ? 1 : 0;
       if (reweighted) weight[i] = cauchy_weight(row, c2);
-      h.noalias() += weight[i] * row.j.transpose() * row.j;
-      g.noalias() += weight[i] * row.j.transpose() * row.e;
+      const double w =
+          !reweighted && options.reject_beyond_inliers && e2 > inlier2 * row.rows ? 0.0 : weight[i];
+      h.noalias() += w * row.j.transpose() * row.j;
+      g.noalias() += w * row.j.transpose() * row.e;
     }
     info = h / (sigma * sigma);
     if (iteration == options.iterations) break;  // the last pass only evaluates
