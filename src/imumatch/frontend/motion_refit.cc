@@ -139,11 +139,10 @@ MotionRefit SolveFrom(const Eigen::Vector3d& t_from, const std::vector<Correspon
     for (size_t i = 0; i < cs.size(); ++i) {
       const Row& row = rs[i];
       if (row.rows == 0) continue;
-      const double e2 = row.e.squaredNorm();
-      out.inliers += e2 <= inlier2 * row.rows ? 1 : 0;
+      const bool inlier = row.e.squaredNorm() <= inlier2 * row.rows;
+      out.inliers += inlier ? 1 : 0;
       if (reweighted) weight[i] = cauchy_weight(row, c2);
-      const double w =
-          !reweighted && options.reject_beyond_inliers && e2 > inlier2 * row.rows ? 0.0 : weight[i];
+      const double w = !reweighted && options.reject_beyond_inliers && !inlier ? 0.0 : weight[i];
       h.noalias() += w * row.j.transpose() * row.j;
       g.noalias() += w * row.j.transpose() * row.e;
     }

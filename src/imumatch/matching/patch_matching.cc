@@ -110,11 +110,11 @@ PatchMatchingStats MatchByPatch(
 
   const float reference_a = ReferenceKeypointSize(ideal_a);
   const float reference_b = ReferenceKeypointSize(ideal_b);
-  // Half the squared localisation factor of a keypoint (see shift_grows_with_scale).
-  const auto half_factor2 = [&options](float size, float reference) {
-    if (!options.shift_grows_with_scale) return 0.5f;
+  // A keypoint's squared localisation factor f^2 (see shift_grows_with_scale; 1 when off).
+  const auto factor2 = [&options](float size, float reference) {
+    if (!options.shift_grows_with_scale) return 1.0f;
     const double f = SizeSigmaFactor(size, reference, 1.0);
-    return static_cast<float>(0.5 * f * f);
+    return static_cast<float>(f * f);
   };
 
   std::vector<char> taken(m, 0);
@@ -160,8 +160,8 @@ PatchMatchingStats MatchByPatch(
     if (built != AlignStatus::kAligned) continue;
     // Every candidate: where the template aligns from it, and how well. Two places are distinct
     // when farther apart than the limit of two keypoints of A's scale.
-    const float half_fa2 = half_factor2(ka.size, reference_a);
-    const float place_spacing2 = max_shift2 * 2.0f * half_fa2;
+    const float fa2 = factor2(ka.size, reference_a);
+    const float place_spacing2 = max_shift2 * fa2;
     int best = -1, places = 0;
     float best_corr = -2.0f, best_d2 = 0.0f;
     Eigen::Vector2f place = Eigen::Vector2f::Zero(), best_xy = Eigen::Vector2f::Zero();
@@ -173,10 +173,8 @@ PatchMatchingStats MatchByPatch(
       ++stats.aligned;
       if (tpl.Align(gray_b, pb, align, &xy, &iterations) != AlignStatus::kAligned) continue;
       const float d2 = (xy - pb).squaredNorm();
-      if (d2 > max_shift2 *
-                   (half_fa2 + half_factor2(ideal_b[static_cast<size_t>(j)].size, reference_b))) {
-        continue;
-      }
+      const float fb2 = factor2(ideal_b[static_cast<size_t>(j)].size, reference_b);
+      if (d2 > max_shift2 * 0.5f * (fa2 + fb2)) continue;
       const float corr = tpl.Correlation(gray_b, xy);
       if (!(corr >= min_corr)) continue;
       if (places == 0 || (xy - place).squaredNorm() > place_spacing2) {
