@@ -362,7 +362,7 @@ TEST(EvalFlightTest, DepthImagesAndTheStillStartAreUsed) {
 // Learnt from the guided pairs' fitted rotations, in flight and without depth (pairs 100-129), the
 // error falls below a third of that within five pairs (to 0.05-0.07 deg: the learnt bias's y
 // component stays 0.008 rad/s from the still start's); without the learning it stays.
-TEST(EvalFlightTest, WithoutAStillStartTheGyroBiasIsLearntFromTheMatches) {
+TEST(EvalFlightVariantTest, WithoutAStillStartTheGyroBiasIsLearntFromTheMatches) {
   const EvalSource src = FlightSource();
   EvaluationOptions o = FlightOptions();
   o.detectors = {DetectorKind::kOrb};
@@ -473,7 +473,7 @@ TEST(EvalFlightTest, InFlightTheSecondPassShrinksTheWindows) {
 // there: window recall 0.54-0.69 in those pairs, and cutting the segments to the neighbours'
 // inverse depths (clamped at infinity) made it worse. The segments now span both ends' gate
 // ellipses, and the neighbours' ranges keep their sign when it is open.
-TEST(EvalFlightTest, MonocularAtTakeOffTheWindowsHoldThePartners) {
+TEST(EvalFlightVariantTest, MonocularAtTakeOffTheWindowsHoldThePartners) {
   EvaluationOptions o = FlightOptions();
   o.monocular = true;
   const EvaluationResult result = EvaluateSource(FlightSource(), ConsecutivePairs(0, 20), o);
@@ -534,7 +534,7 @@ std::pair<double, int> ExpectTakeOffWindowsHold(const EvaluationResult& result) 
 // stated sigma under a millimetre, and its windows lost up to 11 % of the pair's correct matches
 // (checked by clearing no depth: window recall 0.885-0.977 in five of the eight runs). The fit
 // now leaves out depth read near an occlusion edge.
-TEST(EvalFlightTest, AtTakeOffTheFitIgnoresDepthReadAcrossOcclusionEdges) {
+TEST(EvalFlightVariantTest, AtTakeOffTheFitIgnoresDepthReadAcrossOcclusionEdges) {
   EvaluationOptions o = FlightOptions();
   o.detectors = {DetectorKind::kOrb, DetectorKind::kFastBrief};
   std::vector<FramePair> pairs;
@@ -553,7 +553,7 @@ TEST(EvalFlightTest, AtTakeOffTheFitIgnoresDepthReadAcrossOcclusionEdges) {
 // frames 11 -> 12 lost a third of the correct matches to its windows (window recall 0.677, 0.913
 // on the next pair, SIFT 0.963 on frames 10 -> 11). The fit now also starts from directions
 // through pairs of matches when they explain the matches better (translation_direction.h).
-TEST(EvalFlightTest, AtTakeOffTheFitFindsTheTranslationsDirection) {
+TEST(EvalFlightVariantTest, AtTakeOffTheFitFindsTheTranslationsDirection) {
   EvaluationOptions o = FlightOptions();
   o.detectors = {DetectorKind::kSift, DetectorKind::kFastBrief};
   const std::vector<FramePair> pairs = {{10, 11}, {11, 12}, {12, 13}};
