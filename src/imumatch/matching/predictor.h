@@ -11,6 +11,7 @@
 #include "imumatch/camera/pinhole_camera.h"
 #include "imumatch/camera/pixel_undistorter.h"
 #include "imumatch/imu/camera_motion.h"
+#include "imumatch/matching/depth_reading.h"
 #include "imumatch/matching/match_types.h"
 
 namespace imumatch {
@@ -33,12 +34,6 @@ enum class WindowMode { kUncertainty, kFixed };
 //   kOctave: keypoint_sigma_px * octave_scale^octave (cv::KeyPoint::octave's low byte as a signed
 //            level), for callers that know their detector's pyramid factor.
 enum class KeypointSigmaScaling { kNone, kSize, kOctave };
-
-// How a keypoint's depth is read from the depth image of frame A.
-//   kNearest: the pixel under the keypoint (rounded); when it has no reading, the valid pixel
-//             of the 3x3 neighbourhood nearest to the keypoint's sub-pixel position.
-//   kMin3x3 / kMedian3x3: the minimum / median of the valid readings of the 3x3 neighbourhood.
-enum class DepthSampling { kNearest, kMin3x3, kMedian3x3 };
 
 // The near end of the epipolar segments taken from the scene instead of the constant
 // segment_min_depth (PredictKeypointsInScene, matching/scene_depth.h; the predictor itself sweeps
@@ -328,14 +323,5 @@ int PredictKeypointsInRanges(const KeypointPredictor& predictor,
                              const std::vector<float>& depths_m,
                              const std::vector<InverseDepthRange>& ranges,
                              std::vector<KeypointPrediction>* predictions);
-
-// Depth (metres) at sub-pixel position (x, y) of a depth image (image pixels, not ideal ones):
-// CV_16U raw (divided by depth_scale, 0 = no reading) or CV_32F metres (0 / NaN / negative = no
-// reading). NaN when there is no valid reading. Throws InvalidArgument for other types.
-float SampleDepth(const cv::Mat& depth, double depth_scale, float x, float y, DepthSampling mode);
-std::vector<float> SampleDepths(const cv::Mat& depth, double depth_scale,
-                                const std::vector<KeypointInfo>& keypoints, DepthSampling mode);
-std::vector<float> SampleDepths(const cv::Mat& depth, double depth_scale,
-                                const std::vector<cv::KeyPoint>& keypoints, DepthSampling mode);
 
 }  // namespace imumatch
