@@ -33,7 +33,8 @@ endfunction()
 # `NAME.others` for whatever the suites read from the sources do not cover (0 tests normally; a
 # suite added since the last configure). Not one entry per TEST: starting a test process that links
 # OpenCV costs 0.2 s, 0.45 s under ASan, which for ~380 TESTs was a third of the test time. TIMEOUT
-# is per suite (default 900 s). Suites of `integration`-labelled executables start first.
+# is per suite (default 900 s). On a first run the suites with the most TESTs start first, those of
+# `integration`-labelled executables before the rest (COST); later ctest orders by recorded times.
 function(imumatch_add_test NAME)
   if(NOT IMUMATCH_BUILD_TESTS)
     return()
