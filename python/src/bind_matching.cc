@@ -16,6 +16,7 @@
 #include "imumatch/features/feature_factory.h"
 #include "imumatch/matching/baseline_matchers.h"
 #include "imumatch/matching/guided_matcher.h"
+#include "imumatch/matching/guided_pipeline.h"
 #include "imumatch/matching/predictor.h"
 #include "imumatch/matching/subpixel_refinement.h"
 

@@ -17,6 +17,7 @@
 #include "imumatch/io/trajectory_io.h"
 #include "imumatch/matching/baseline_matchers.h"
 #include "imumatch/matching/guided_matcher.h"
+#include "imumatch/matching/guided_pipeline.h"
 #include "imumatch/matching/subpixel_refinement.h"
 #include "imumatch/sim/synthetic_sequence.h"
 

@@ -13,6 +13,7 @@
 #include "imumatch/imu/camera_motion.h"
 #include "imumatch/imu/imu_integrator.h"
 #include "imumatch/matching/guided_matcher.h"
+#include "imumatch/matching/guided_pipeline.h"
 #include "imumatch/matching/patch_matching.h"
 #include "imumatch/matching/subpixel_refinement.h"
 #include "imumatch/sim/imu_simulator.h"

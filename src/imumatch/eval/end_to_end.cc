@@ -14,6 +14,7 @@
 #include "imumatch/eval/pair_motion.h"
 #include "imumatch/features/parallel_tasks.h"
 #include "imumatch/matching/baseline_matchers.h"
+#include "imumatch/matching/guided_pipeline.h"
 
 namespace imumatch {
 

@@ -27,6 +27,7 @@
 #include "imumatch/features/orb_split.h"
 #include "imumatch/matching/baseline_matchers.h"
 #include "imumatch/matching/guided_matcher.h"
+#include "imumatch/matching/guided_pipeline.h"
 
 namespace imumatch {
 namespace bench {

@@ -1,4 +1,5 @@
 #include "imumatch/matching/guided_matcher.h"
+#include "imumatch/matching/guided_pipeline.h"
 
 #include <algorithm>
 #include <cmath>

@@ -25,6 +25,7 @@
 #include "imumatch/matching/baseline_matchers.h"
 #include "imumatch/matching/grid_index.h"
 #include "imumatch/matching/guided_matcher.h"
+#include "imumatch/matching/guided_pipeline.h"
 #include "imumatch/matching/matching_benchmark_data.h"
 #include "imumatch/matching/subpixel_refinement.h"
 

@@ -16,6 +16,7 @@
 
 #include "imumatch/matching/grid_index.h"
 #include "imumatch/matching/guided_matcher.h"
+#include "imumatch/matching/guided_pipeline.h"
 #include "imumatch/matching/matching_benchmark_data.h"
 
 namespace imumatch::bench {

@@ -8,6 +8,7 @@
 #include "imumatch/matching/descriptor_distance.h"
 #include "imumatch/matching/grid_index.h"
 #include "imumatch/matching/guided_matcher.h"
+#include "imumatch/matching/guided_pipeline.h"
 #include "imumatch/matching/match_types.h"
 #include "imumatch/matching/predictor.h"
 

@@ -15,6 +15,7 @@
 #include "imumatch/io/trajectory_io.h"  // ReadTumPose
 #include "imumatch/matching/baseline_matchers.h"
 #include "imumatch/matching/guided_matcher.h"
+#include "imumatch/matching/guided_pipeline.h"
 #include "imumatch/testing/test_data.h"
 
 namespace imumatch {
