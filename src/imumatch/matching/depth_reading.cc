@@ -56,31 +56,36 @@ float SampleDepth(const cv::Mat& depth, double depth_scale, float x, float y, De
   return SampleTyped<float>(depth, 1.0, x, y, mode);
 }
 
-std::vector<float> SampleDepths(const cv::Mat& depth, double depth_scale,
-                                const std::vector<KeypointInfo>& keypoints, DepthSampling mode) {
+namespace {
+
+// Depth at each position position_of(i), i < n, on the image's type chosen once.
+template <typename PositionOf>
+std::vector<float> SampleEach(const cv::Mat& depth, double depth_scale, size_t n,
+                              DepthSampling mode, PositionOf position_of) {
   CheckDepthImage(depth, depth_scale);
-  std::vector<float> out(keypoints.size());
+  std::vector<float> out(n);
   const bool raw = depth.type() == CV_16UC1;
   const double inv = 1.0 / depth_scale;
-  for (size_t i = 0; i < keypoints.size(); ++i) {
-    out[i] = raw ? SampleTyped<uint16_t>(depth, inv, keypoints[i].x, keypoints[i].y, mode)
-                 : SampleTyped<float>(depth, 1.0, keypoints[i].x, keypoints[i].y, mode);
+  for (size_t i = 0; i < n; ++i) {
+    const cv::Point2f p = position_of(i);
+    out[i] = raw ? SampleTyped<uint16_t>(depth, inv, p.x, p.y, mode)
+                 : SampleTyped<float>(depth, 1.0, p.x, p.y, mode);
   }
   return out;
 }
 
+}  // namespace
+
+std::vector<float> SampleDepths(const cv::Mat& depth, double depth_scale,
+                                const std::vector<KeypointInfo>& keypoints, DepthSampling mode) {
+  return SampleEach(depth, depth_scale, keypoints.size(), mode,
+                    [&](size_t i) { return cv::Point2f(keypoints[i].x, keypoints[i].y); });
+}
+
 std::vector<float> SampleDepths(const cv::Mat& depth, double depth_scale,
                                 const std::vector<cv::KeyPoint>& keypoints, DepthSampling mode) {
-  CheckDepthImage(depth, depth_scale);
-  std::vector<float> out(keypoints.size());
-  const bool raw = depth.type() == CV_16UC1;
-  const double inv = 1.0 / depth_scale;
-  for (size_t i = 0; i < keypoints.size(); ++i) {
-    const cv::Point2f& pt = keypoints[i].pt;
-    out[i] = raw ? SampleTyped<uint16_t>(depth, inv, pt.x, pt.y, mode)
-                 : SampleTyped<float>(depth, 1.0, pt.x, pt.y, mode);
-  }
-  return out;
+  return SampleEach(depth, depth_scale, keypoints.size(), mode,
+                    [&](size_t i) { return keypoints[i].pt; });
 }
 
 }  // namespace imumatch
