@@ -286,6 +286,7 @@ nlohmann::json ReportToJson(const EvaluationResult& result, const ReportContext&
                                        {"fit_ms", run.refit_ms},
                                        {"fit_rotation_error_deg", run.refit_rotation_error_deg},
                                        {"fit_translation_error_m", run.refit_translation_error_m},
+                                       {"fit_truth_mahalanobis2", run.refit_truth_mahalanobis2},
                                        {"fit_matches_with_depth", run.refit.with_depth},
                                        {"first_window_px", run.first_window_px},
                                        {"window_px", run.window_px},
