@@ -15,6 +15,31 @@ namespace {
 
 PinholeCamera Camera() { return PinholeCamera::KinectDefault(); }
 
+// Appends the match of a keypoint of A at uv_a with one of B at uv_b (both of size 7).
+void AddMatch(const Eigen::Vector2d& uv_a, const Eigen::Vector2d& uv_b,
+              std::vector<cv::KeyPoint>* keypoints_a, std::vector<cv::KeyPoint>* keypoints_b,
+              std::vector<Match>* matches) {
+  Match m;
+  m.query_idx = static_cast<int>(keypoints_a->size());
+  m.train_idx = static_cast<int>(keypoints_b->size());
+  keypoints_a->emplace_back(static_cast<float>(uv_a.x()), static_cast<float>(uv_a.y()), 7.0f);
+  keypoints_b->emplace_back(static_cast<float>(uv_b.x()), static_cast<float>(uv_b.y()), 7.0f);
+  matches->push_back(m);
+}
+
+// [dtheta; dt] of `truth` relative to `motion`, as CameraMotion's covariance has it, and the
+// squared Mahalanobis distance of the truth from a fit under the fit's covariance.
+Eigen::Matrix<double, 6, 1> Offset(const Rigid3d& truth, const Rigid3d& motion) {
+  Eigen::Matrix<double, 6, 1> d;
+  d.head<3>() = LogSO3(truth.rotation * motion.rotation.inverse());
+  d.tail<3>() = truth.translation - motion.translation;
+  return d;
+}
+double TruthMahalanobis2(const Rigid3d& truth, const MotionRefit& fit) {
+  const Eigen::Matrix<double, 6, 1> e = Offset(truth, fit.motion.cam_b_from_cam_a);
+  return e.dot(fit.motion.covariance.ldlt().solve(e));
+}
+
 Rigid3d TrueMotion() {
   return Rigid3d(ExpSO3(Eigen::Vector3d(0.01, -0.03, 0.02)), Eigen::Vector3d(0.05, -0.02, 0.08));
 }
@@ -46,12 +71,7 @@ Scene MakeScene(const Rigid3d& b_from_a, int n, double noise_px, double outlier_
     } else {
       pb += Eigen::Vector2d(gauss(rng), gauss(rng));
     }
-    Match m;
-    m.query_idx = static_cast<int>(s.keypoints_a.size());
-    m.train_idx = static_cast<int>(s.keypoints_b.size());
-    s.keypoints_a.emplace_back(static_cast<float>(uv.x()), static_cast<float>(uv.y()), 7.0f);
-    s.keypoints_b.emplace_back(static_cast<float>(pb.x()), static_cast<float>(pb.y()), 7.0f);
-    s.matches.push_back(m);
+    AddMatch(uv, pb, &s.keypoints_a, &s.keypoints_b, &s.matches);
     s.depths.push_back(static_cast<float>(z));
   }
   return s;
@@ -67,12 +87,9 @@ CameraMotion Prior(const Eigen::Matrix<double, 6, 1>& offset,
   return m;
 }
 
-// [dtheta; dt] of the truth relative to a motion, as CameraMotion's covariance has it.
+// [dtheta; dt] of the true motion relative to a motion.
 Eigen::Matrix<double, 6, 1> TruthFrom(const Rigid3d& motion) {
-  Eigen::Matrix<double, 6, 1> d;
-  d.head<3>() = LogSO3(TrueMotion().rotation * motion.rotation.inverse());
-  d.tail<3>() = TrueMotion().translation - motion.translation;
-  return d;
+  return Offset(TrueMotion(), motion);
 }
 
 Eigen::Matrix<double, 6, 1> Vec6(double a, double b, double c, double d, double e, double f) {
@@ -299,10 +316,7 @@ TEST(MotionRefitTest, AtTakeOffAPriorFarOffInDirectionIsCorrected) {
     ++t->held;
     const Eigen::Vector3d got = r.motion.cam_b_from_cam_a.translation;
     t->angle_sum += std::acos(std::min(1.0, got.normalized().dot(t_true.normalized())));
-    Eigen::Matrix<double, 6, 1> e;
-    e.head<3>() = LogSO3(truth.rotation * r.motion.cam_b_from_cam_a.rotation.inverse());
-    e.tail<3>() = t_true - got;
-    t->confident_and_wrong += e.dot(r.motion.covariance.ldlt().solve(e)) > 22.46 ? 1 : 0;
+    t->confident_and_wrong += TruthMahalanobis2(truth, r) > 22.46 ? 1 : 0;
   };
   constexpr int kScenes = 40;
   for (int scene = 0; scene < kScenes; ++scene) {
@@ -323,12 +337,7 @@ TEST(MotionRefitTest, AtTakeOffAPriorFarOffInDirectionIsCorrected) {
         pb += d * Eigen::Vector2d(std::cos(a), std::sin(a));
       }
       if (pb.x() < 0 || pb.x() >= c.width || pb.y() < 0 || pb.y() >= c.height) continue;
-      Match m;
-      m.query_idx = static_cast<int>(ka.size());
-      m.train_idx = static_cast<int>(kb.size());
-      ka.emplace_back(static_cast<float>(uv.x()), static_cast<float>(uv.y()), 7.0f);
-      kb.emplace_back(static_cast<float>(pb.x()), static_cast<float>(pb.y()), 7.0f);
-      matches.push_back(m);
+      AddMatch(uv, pb, &ka, &kb, &matches);
     }
     tally(RefitMotion(prior, matches, ka, kb, {}, PredictionOptions(), und, MotionRefitOptions()),
           &with);
@@ -391,12 +400,7 @@ TEST(MotionRefitTest, ATurnOnTheSpotWithoutDepthKeepsTheTruthInsideTheFitsCovari
       const Eigen::Vector2d pb(c.fx * q.x() / q.z() + c.cx + gauss(rng),
                                c.fy * q.y() / q.z() + c.cy + gauss(rng));
       if (pb.x() < 0 || pb.x() >= c.width || pb.y() < 0 || pb.y() >= c.height) continue;
-      Match m;
-      m.query_idx = static_cast<int>(ka.size());
-      m.train_idx = static_cast<int>(kb.size());
-      ka.emplace_back(static_cast<float>(uv.x()), static_cast<float>(uv.y()), 7.0f);
-      kb.emplace_back(static_cast<float>(pb.x()), static_cast<float>(pb.y()), 7.0f);
-      matches.push_back(m);
+      AddMatch(uv, pb, &ka, &kb, &matches);
     }
     // The IMU: rotation good to 0.05 deg, translation to 3 mm (0.05 m/s over 1/20 s), drawn.
     std::normal_distribution<double> unit(0.0, 1.0);
@@ -409,11 +413,7 @@ TEST(MotionRefitTest, ATurnOnTheSpotWithoutDepthKeepsTheTruthInsideTheFitsCovari
         RefitMotion(prior, matches, ka, kb, {}, PredictionOptions(), und, MotionRefitOptions());
     if (!r.ok) continue;
     ++held;
-    Eigen::Matrix<double, 6, 1> e;
-    e.head<3>() = LogSO3(truth.rotation * r.motion.cam_b_from_cam_a.rotation.inverse());
-    e.tail<3>() = truth.translation - r.motion.cam_b_from_cam_a.translation;
-    const double m2 = e.dot(r.motion.covariance.ldlt().solve(e));
-    inside += m2 <= 22.46 ? 1 : 0;
+    inside += TruthMahalanobis2(truth, r) <= 22.46 ? 1 : 0;
   }
   std::printf("of %d scenes: fits held %d, truth inside the 99.9 %% ellipsoid %d\n", kScenes, held,
               inside);
