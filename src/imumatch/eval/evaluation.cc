@@ -11,7 +11,6 @@
 #include <sstream>
 #include <utility>
 
-#include <Eigen/Cholesky>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -377,10 +376,7 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
               RotationDistance(fitted.rotation, gt.cam_b_from_cam_a.rotation) * 180.0 / M_PI;
           run.refit_translation_error_m =
               (fitted.translation - gt.cam_b_from_cam_a.translation).norm();
-          Eigen::Matrix<double, 6, 1> e;  // CameraMotion's perturbation from fit to truth
-          e.head<3>() = LogSO3(gt.cam_b_from_cam_a.rotation * fitted.rotation.inverse());
-          e.tail<3>() = gt.cam_b_from_cam_a.translation - fitted.translation;
-          run.refit_truth_mahalanobis2 = e.dot(run.refit.motion.covariance.ldlt().solve(e));
+          run.refit_truth_mahalanobis2 = SquaredMahalanobis(run.refit.motion, gt.cam_b_from_cam_a);
         }
         if (IsBruteForce(method) && rec.bf_run < 0) {
           rec.bf_run = static_cast<int>(m);

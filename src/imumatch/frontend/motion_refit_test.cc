@@ -27,19 +27,6 @@ void AddMatch(const Eigen::Vector2d& uv_a, const Eigen::Vector2d& uv_b,
   matches->push_back(m);
 }
 
-// [dtheta; dt] of `truth` relative to `motion`, as CameraMotion's covariance has it, and the
-// squared Mahalanobis distance of the truth from a fit under the fit's covariance.
-Eigen::Matrix<double, 6, 1> Offset(const Rigid3d& truth, const Rigid3d& motion) {
-  Eigen::Matrix<double, 6, 1> d;
-  d.head<3>() = LogSO3(truth.rotation * motion.rotation.inverse());
-  d.tail<3>() = truth.translation - motion.translation;
-  return d;
-}
-double TruthMahalanobis2(const Rigid3d& truth, const MotionRefit& fit) {
-  const Eigen::Matrix<double, 6, 1> e = Offset(truth, fit.motion.cam_b_from_cam_a);
-  return e.dot(fit.motion.covariance.ldlt().solve(e));
-}
-
 Rigid3d TrueMotion() {
   return Rigid3d(ExpSO3(Eigen::Vector3d(0.01, -0.03, 0.02)), Eigen::Vector3d(0.05, -0.02, 0.08));
 }
@@ -87,11 +74,6 @@ CameraMotion Prior(const Eigen::Matrix<double, 6, 1>& offset,
   return m;
 }
 
-// [dtheta; dt] of the true motion relative to a motion.
-Eigen::Matrix<double, 6, 1> TruthFrom(const Rigid3d& motion) {
-  return Offset(TrueMotion(), motion);
-}
-
 Eigen::Matrix<double, 6, 1> Vec6(double a, double b, double c, double d, double e, double f) {
   Eigen::Matrix<double, 6, 1> v;
   v << a, b, c, d, e, f;
@@ -102,8 +84,7 @@ Eigen::Matrix<double, 6, 1> Vec6(double a, double b, double c, double d, double 
 // 99.9 %: 22.46), and every axis's sigma below `shrink` times the prior's.
 void ExpectTruthInsideAndTighter(const MotionRefit& r, const Eigen::Matrix<double, 6, 1>& sigma,
                                  double shrink) {
-  const Eigen::Matrix<double, 6, 1> e = TruthFrom(r.motion.cam_b_from_cam_a);
-  EXPECT_LT(e.dot(r.motion.covariance.ldlt().solve(e)), 22.46);
+  EXPECT_LT(SquaredMahalanobis(r.motion, TrueMotion()), 22.46);
   for (int k = 0; k < 6; ++k) {
     EXPECT_LT(std::sqrt(r.motion.covariance(k, k)), shrink * sigma[k]) << "axis " << k;
   }
@@ -316,7 +297,7 @@ TEST(MotionRefitTest, AtTakeOffAPriorFarOffInDirectionIsCorrected) {
     ++t->held;
     const Eigen::Vector3d got = r.motion.cam_b_from_cam_a.translation;
     t->angle_sum += std::acos(std::min(1.0, got.normalized().dot(t_true.normalized())));
-    t->confident_and_wrong += TruthMahalanobis2(truth, r) > 22.46 ? 1 : 0;
+    t->confident_and_wrong += SquaredMahalanobis(r.motion, truth) > 22.46 ? 1 : 0;
   };
   constexpr int kScenes = 40;
   for (int scene = 0; scene < kScenes; ++scene) {
@@ -413,7 +394,7 @@ TEST(MotionRefitTest, ATurnOnTheSpotWithoutDepthKeepsTheTruthInsideTheFitsCovari
         RefitMotion(prior, matches, ka, kb, {}, PredictionOptions(), und, MotionRefitOptions());
     if (!r.ok) continue;
     ++held;
-    inside += TruthMahalanobis2(truth, r) <= 22.46 ? 1 : 0;
+    inside += SquaredMahalanobis(r.motion, truth) <= 22.46 ? 1 : 0;
   }
   std::printf("of %d scenes: fits held %d, truth inside the 99.9 %% ellipsoid %d\n", kScenes, held,
               inside);
@@ -539,12 +520,7 @@ TEST(MotionRefitTest, DepthsReadAcrossAnOcclusionEdgeNoLongerSetTheTranslationsL
   CameraMotion prior;  // the IMU: 8 mm short, 0.1 deg and 8 mm sigmas
   prior.cam_b_from_cam_a = Rigid3d(truth.rotation, truth.translation * (16.0 / 24.6));
   prior.covariance = Vec6(2e-3, 2e-3, 2e-3, 8e-3, 8e-3, 8e-3).cwiseAbs2().asDiagonal();
-  auto truth_m2 = [&](const MotionRefit& r) {
-    Eigen::Matrix<double, 6, 1> e;
-    e.head<3>() = LogSO3(truth.rotation * r.motion.cam_b_from_cam_a.rotation.inverse());
-    e.tail<3>() = truth.translation - r.motion.cam_b_from_cam_a.translation;
-    return e.dot(r.motion.covariance.ldlt().solve(e));
-  };
+  auto truth_m2 = [&](const MotionRefit& r) { return SquaredMahalanobis(r.motion, truth); };
   const MotionRefit pulled = RefitMotion(prior, s.matches, s.keypoints_a, s.keypoints_b, s.depths,
                                          PredictionOptions(), und, MotionRefitOptions());
   ASSERT_TRUE(pulled.ok) << pulled.reason;

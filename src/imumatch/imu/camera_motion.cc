@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include <Eigen/Cholesky>
+
 #include "imumatch/core/error.h"
 #include "imumatch/core/so3.h"
 
@@ -89,6 +91,18 @@ CameraMotion ComputeCameraMotion(const ImuBuffer& buffer, int64_t t_a_ns, int64_
   out.covariance = j * in * j.transpose();
   out.covariance = 0.5 * (out.covariance + out.covariance.transpose()).eval();
   return out;
+}
+
+Eigen::Matrix<double, 6, 1> MotionPerturbation(const Rigid3d& motion, const Rigid3d& other) {
+  Eigen::Matrix<double, 6, 1> d;
+  d.head<3>() = LogSO3(other.rotation * motion.rotation.inverse());
+  d.tail<3>() = other.translation - motion.translation;
+  return d;
+}
+
+double SquaredMahalanobis(const CameraMotion& m, const Rigid3d& other) {
+  const Eigen::Matrix<double, 6, 1> e = MotionPerturbation(m.cam_b_from_cam_a, other);
+  return e.dot(m.covariance.ldlt().solve(e));
 }
 
 CameraMotion CameraMotionFromPoses(int64_t t_a_ns, const Rigid3d& world_from_cam_a, int64_t t_b_ns,

@@ -81,12 +81,28 @@ TEST(CameraMotion, CovarianceIsCalibrated) {
         options.velocity_sigma * Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
     const CameraMotion m = ComputeCameraMotion(buffer, SecondsToNs(ta), SecondsToNs(tb), state,
                                                params, CamFromImu(), options);
-    Eigen::Matrix<double, 6, 1> e;
-    e.head<3>() = LogSO3(truth.cam_b_from_cam_a.rotation * m.cam_b_from_cam_a.rotation.conjugate());
-    e.tail<3>() = truth.cam_b_from_cam_a.translation - m.cam_b_from_cam_a.translation;
-    chi2_sum += e.dot(m.covariance.ldlt().solve(e));
+    chi2_sum += SquaredMahalanobis(m, truth.cam_b_from_cam_a);
   }
   EXPECT_NEAR(chi2_sum / runs, 6.0, 1.2);
+}
+
+// By hand, with rotations about one axis (their angles add): from R = Exp(0.1 x), t = (1, 2, 3)
+// to R' = Exp(0.25 x), t' = (2, 4, 6) the perturbation is (0.15, 0, 0, 1, 2, 3); under the
+// covariance diag(0.01, 1, 1, 4, 4, 4) its squared Mahalanobis norm is
+// 0.15^2 / 0.01 + (1 + 4 + 9) / 4 = 5.75.
+TEST(CameraMotion, PerturbationAndSquaredMahalanobisByHand) {
+  CameraMotion m;
+  m.cam_b_from_cam_a = Rigid3d(ExpSO3(Eigen::Vector3d(0.1, 0, 0)), Eigen::Vector3d(1, 2, 3));
+  const Rigid3d other(ExpSO3(Eigen::Vector3d(0.25, 0, 0)), Eigen::Vector3d(2, 4, 6));
+  const Eigen::Matrix<double, 6, 1> d = MotionPerturbation(m.cam_b_from_cam_a, other);
+  Eigen::Matrix<double, 6, 1> expected;
+  expected << 0.15, 0, 0, 1, 2, 3;
+  EXPECT_LT((d - expected).norm(), 1e-12);
+  Eigen::Matrix<double, 6, 1> variances;
+  variances << 0.01, 1, 1, 4, 4, 4;
+  m.covariance = variances.asDiagonal();
+  EXPECT_NEAR(SquaredMahalanobis(m, other), 5.75, 1e-9);
+  EXPECT_NEAR(SquaredMahalanobis(m, m.cam_b_from_cam_a), 0.0, 1e-24);
 }
 
 TEST(CameraMotion, PaperModeDiffersFromSo3ByGravity) {
