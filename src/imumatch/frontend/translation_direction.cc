@@ -60,14 +60,30 @@ double TranslationDirectionCost(const std::vector<Eigen::Vector3d>& ra,
                                 double f, double sigma, double cauchy_scale,
                                 const Eigen::Vector3d& t_prior, const Eigen::Matrix3d& t_info) {
   const double c2 = cauchy_scale * cauchy_scale * sigma * sigma;
-  double cost = 0.0;
+  // The sum of log(1 + u_i) as the logarithm of products of up to 16 factors: one logarithm per
+  // 16 correspondences instead of one each (the logarithms were a quarter of the fit's time). A
+  // product stays far below the double range: a factor above 1e30 (an error of 1e15 sigmas) is
+  // taken alone.
+  double cost = 0.0, product = 1.0;
+  int factors = 0;
   for (size_t i = 0; i < ra.size(); ++i) {
     const Eigen::Vector3d l = t.cross(ra[i]);
     const double n2 = l.x() * l.x() + l.y() * l.y();
     if (!(n2 > 0.0)) continue;
     const double e = f * xb[i].dot(l);
-    cost += std::log1p(static_cast<float>(e * e / (n2 * c2)));  // float: a ranking, not a fit
+    const double factor = 1.0 + e * e / (n2 * c2);
+    if (!(factor <= 1e30)) {
+      cost += std::log(factor);
+      continue;
+    }
+    product *= factor;
+    if (++factors == 16) {
+      cost += std::log(product);
+      product = 1.0;
+      factors = 0;
+    }
   }
+  cost += std::log(product);
   const Eigen::Vector3d d = t - t_prior;
   return 0.5 * cauchy_scale * cauchy_scale * cost + 0.5 * d.dot(t_info * d);
 }
