@@ -37,6 +37,74 @@ struct Correspondence {
   double z;
 };
 
+// One correspondence's residual (ideal px) and its Jacobian; rows 0 when it has none (behind
+// camera B, or B's bearing on the epipole).
+struct Row {
+  Eigen::Matrix<double, 2, 6> j;
+  Eigen::Vector2d e;
+  int rows;  // 2: reprojection; 1: epipolar (e[1] and j's second row zero); 0: none
+  // The row's weight factor: below 1 for an epipolar row that would say more about the
+  // translation than a reprojection row at the scene's nearest depth could (MaxEpipolarDedt2).
+  double scale;
+};
+
+// An epipolar row is a reprojection row at the depth its match triangulates to: d e / d t is
+// about f / z there. Near the epipole, or when the translation is tiny (a turn on the spot), that
+// depth is ill-conditioned and the linearised row claims a certainty about the translation that
+// no point of the scene can give (on a synthetic turn, rows of 0.1 mm translation shrank two of
+// the fit's six covariance axes 100-fold and left the truth at squared Mahalanobis 1e4-1e5).
+// Such a row keeps the weight of one whose |d e / d t| is f / segment_min_depth: a point at the
+// nearest depth the predictions consider. The bound on |d e / d t|^2:
+double MaxEpipolarDedt2(double f, const PredictionOptions& prediction) {
+  return (f / prediction.segment_min_depth) * (f / prediction.segment_min_depth);
+}
+
+// The row of correspondence c at the motion (r, t): a reprojection error when A's keypoint has a
+// depth, else the distance from B's keypoint to the epipolar line (both in ideal pixels, f).
+void ComputeRow(const Correspondence& c, const Eigen::Matrix3d& r, const Eigen::Vector3d& t,
+                double f, double max_dedt2, Row& row) {
+  row.rows = 0;
+  row.scale = 1.0;
+  const Eigen::Vector3d ra = r * c.xa;
+  if (std::isfinite(c.z)) {
+    const Eigen::Vector3d pr = ra * c.z;
+    const Eigen::Vector3d q = pr + t;
+    if (!(q.z() > 1e-6)) return;
+    row.e = Eigen::Vector2d(f * (q.x() / q.z() - c.xb.x()), f * (q.y() / q.z() - c.xb.y()));
+    Eigen::Matrix<double, 2, 3> dpi;
+    dpi << f / q.z(), 0.0, -f * q.x() / (q.z() * q.z()), 0.0, f / q.z(),
+        -f * q.y() / (q.z() * q.z());
+    // dq / d(dtheta) = -Hat(R p), dq / d(dt) = I; a row a of dpi gives -a Hat(p) = -(a x p)^T.
+    row.j.block<1, 3>(0, 0) = -dpi.row(0).cross(pr.transpose());
+    row.j.block<1, 3>(1, 0) = -dpi.row(1).cross(pr.transpose());
+    row.j.rightCols<3>() = dpi;
+    row.rows = 2;
+    return;
+  }
+  // Epipolar line l = t x R x_a in B; e = f (x_b . l) / |(l_x, l_y)|.
+  const Eigen::Vector3d l = t.cross(ra);
+  const double n = std::sqrt(l.x() * l.x() + l.y() * l.y());
+  if (!(n > 1e-12)) return;
+  row.e = Eigen::Vector2d(f * c.xb.dot(l) / n, 0.0);
+  // de / dl = f / n (x_b - (x_b . l) / n^2 (l_x, l_y, 0)): zero along l, so e does not change
+  // with t's length. dl / d(dtheta) = -Hat(t) Hat(R x_a), dl / d(dt) = -Hat(R x_a).
+  const Eigen::RowVector3d de_dl =
+      (f / n) *
+      (c.xb.transpose() - (c.xb.dot(l) / (n * n)) * Eigen::RowVector3d(l.x(), l.y(), 0.0));
+  // a Hat(v) = (a x v)^T for a row a: -a Hat(t) Hat(ra) = -((a x t) x ra)^T.
+  row.j.setZero();
+  row.j.block<1, 3>(0, 0) = -(de_dl.cross(t.transpose())).cross(ra.transpose());
+  row.j.block<1, 3>(0, 3) = -de_dl.cross(ra.transpose());
+  row.rows = 1;
+  const double dedt2 = row.j.block<1, 3>(0, 3).squaredNorm();
+  if (dedt2 > max_dedt2) row.scale = max_dedt2 / dedt2;
+}
+
+// Cauchy weight of a row at squared scale c2 (per residual row).
+double CauchyWeight(const Row& row, double c2) {
+  return 1.0 / (1.0 + row.e.squaredNorm() / (row.rows * c2));
+}
+
 // h's upper triangle += w j^T j and g += w j^T e over a row's `rows` residual rows: rank-one
 // updates of the 21 entries that the symmetric normal matrix has (the product of the whole 6 x 2
 // by 2 x 6 block costs 72 multiply-adds and a temporary, half of them on an epipolar row's zero
@@ -76,12 +144,13 @@ void MirrorUpper(Eigen::Matrix<double, 6, 6>& h) {
   }
 }
 
-// Gauss-Newton from the prior's rotation and translation t_from (see RefitMotion).
+// Gauss-Newton from the prior's rotation and translation t_from (see RefitMotion). When the fit
+// holds, *r_out (if given) receives its rotation as iterated.
 MotionRefit SolveFrom(const Eigen::Vector3d& t_from, const std::vector<Correspondence>& cs,
                       const MotionRefit& base, const Eigen::Matrix3d& r_prior,
-                      const Eigen::Vector3d& t_prior, const Eigen::Matrix<double, 6, 6>& prior_cov,
-                      const Eigen::Matrix<double, 6, 6>& prior_info, double f,
-                      const PredictionOptions& prediction, const MotionRefitOptions& options) {
+                      const Eigen::Vector3d& t_prior, const Eigen::Matrix<double, 6, 6>& prior_info,
+                      double f, const PredictionOptions& prediction,
+                      const MotionRefitOptions& options, Eigen::Matrix3d* r_out) {
   MotionRefit out = base;
   Eigen::Matrix3d r = r_prior;
   Eigen::Vector3d t = t_from;
@@ -93,60 +162,9 @@ MotionRefit SolveFrom(const Eigen::Vector3d& t_from, const std::vector<Correspon
   };
 
   double sigma = options.min_residual_px;
-  // One correspondence's residual (ideal px) and its Jacobian; rows 0 when it has none (behind
-  // camera B, or B's bearing on the epipole).
-  struct Row {
-    Eigen::Matrix<double, 2, 6> j;
-    Eigen::Vector2d e;
-    int rows;  // 2: reprojection; 1: epipolar (e[1] and j's second row zero); 0: none
-    // The row's weight factor: below 1 for an epipolar row that would say more about the
-    // translation than a reprojection row at the scene's nearest depth could (below).
-    double scale;
-  };
-  // An epipolar row is a reprojection row at the depth its match triangulates to: d e / d t is
-  // about f / z there. Near the epipole, or when the translation is tiny (a turn on the spot), that
-  // depth is ill-conditioned and the linearised row claims a certainty about the translation that
-  // no point of the scene can give (on a synthetic turn, rows of 0.1 mm translation shrank two of
-  // the fit's six covariance axes 100-fold and left the truth at squared Mahalanobis 1e4-1e5).
-  // Such a row keeps the weight of one whose |d e / d t| is f / segment_min_depth: a point at the
-  // nearest depth the predictions consider.
-  const double max_dedt2 = (f / prediction.segment_min_depth) * (f / prediction.segment_min_depth);
+  const double max_dedt2 = MaxEpipolarDedt2(f, prediction);
   auto residual = [&](const Correspondence& c, Row& row) {
-    row.rows = 0;
-    row.scale = 1.0;
-    const Eigen::Vector3d ra = r * c.xa;
-    if (std::isfinite(c.z)) {
-      const Eigen::Vector3d pr = ra * c.z;
-      const Eigen::Vector3d q = pr + t;
-      if (!(q.z() > 1e-6)) return;
-      row.e = Eigen::Vector2d(f * (q.x() / q.z() - c.xb.x()), f * (q.y() / q.z() - c.xb.y()));
-      Eigen::Matrix<double, 2, 3> dpi;
-      dpi << f / q.z(), 0.0, -f * q.x() / (q.z() * q.z()), 0.0, f / q.z(),
-          -f * q.y() / (q.z() * q.z());
-      // dq / d(dtheta) = -Hat(R p), dq / d(dt) = I; a row a of dpi gives -a Hat(p) = -(a x p)^T.
-      row.j.block<1, 3>(0, 0) = -dpi.row(0).cross(pr.transpose());
-      row.j.block<1, 3>(1, 0) = -dpi.row(1).cross(pr.transpose());
-      row.j.rightCols<3>() = dpi;
-      row.rows = 2;
-      return;
-    }
-    // Epipolar line l = t x R x_a in B; e = f (x_b . l) / |(l_x, l_y)|.
-    const Eigen::Vector3d l = t.cross(ra);
-    const double n = std::sqrt(l.x() * l.x() + l.y() * l.y());
-    if (!(n > 1e-12)) return;
-    row.e = Eigen::Vector2d(f * c.xb.dot(l) / n, 0.0);
-    // de / dl = f / n (x_b - (x_b . l) / n^2 (l_x, l_y, 0)): zero along l, so e does not change
-    // with t's length. dl / d(dtheta) = -Hat(t) Hat(R x_a), dl / d(dt) = -Hat(R x_a).
-    const Eigen::RowVector3d de_dl =
-        (f / n) *
-        (c.xb.transpose() - (c.xb.dot(l) / (n * n)) * Eigen::RowVector3d(l.x(), l.y(), 0.0));
-    // a Hat(v) = (a x v)^T for a row a: -a Hat(t) Hat(ra) = -((a x t) x ra)^T.
-    row.j.setZero();
-    row.j.block<1, 3>(0, 0) = -(de_dl.cross(t.transpose())).cross(ra.transpose());
-    row.j.block<1, 3>(0, 3) = -de_dl.cross(ra.transpose());
-    row.rows = 1;
-    const double dedt2 = row.j.block<1, 3>(0, 3).squaredNorm();
-    if (dedt2 > max_dedt2) row.scale = max_dedt2 / dedt2;
+    ComputeRow(c, r, t, f, max_dedt2, row);
   };
 
   // Per iteration: every residual and Jacobian once; while reweighting, their robust sigma and
@@ -154,10 +172,6 @@ MotionRefit SolveFrom(const Eigen::Vector3d& t_from, const std::vector<Correspon
   // Reweighting every step converges only linearly (about halving the error per step on MH_05),
   // so the sigma and the weights are kept once the sigma settles (or after
   // options.reweight_steps): Gauss-Newton on the fixed weighted problem then converges in a few.
-  // Cauchy weight of a row at squared scale c2 (per residual row).
-  auto cauchy_weight = [](const Row& row, double c2) {
-    return 1.0 / (1.0 + row.e.squaredNorm() / (row.rows * c2));
-  };
   std::vector<Row> rs(cs.size());
   std::vector<double> weight(cs.size(), 0.0);
   std::vector<double> abs_rows;
@@ -194,7 +208,7 @@ MotionRefit SolveFrom(const Eigen::Vector3d& t_from, const std::vector<Correspon
       if (row.rows == 0) continue;
       const bool inlier = row.e.squaredNorm() <= inlier2 * row.rows;
       out.inliers += inlier ? 1 : 0;
-      if (reweighted) weight[i] = cauchy_weight(row, c2);
+      if (reweighted) weight[i] = CauchyWeight(row, c2);
       const double w =
           (!reweighted && options.reject_beyond_inliers && !inlier ? 0.0 : weight[i]) * row.scale;
       AccumulateUpper(row.j, row.e, row.rows, w, h, g);
@@ -255,7 +269,27 @@ MotionRefit SolveFrom(const Eigen::Vector3d& t_from, const std::vector<Correspon
   }
   out.motion.cam_b_from_cam_a = Rigid3d(Eigen::Quaterniond(r).normalized(), t);
   out.motion.covariance = 0.5 * (cov + cov.transpose());
-  if (!options.measure_rotation) return out;
+  if (r_out != nullptr) *r_out = r;
+  return out;
+}
+
+// The rotation the matches alone measure (MotionRefit::rotation_from_matches), from a fit that
+// holds: fit (its translation, sigma_px and ok) and r, its rotation as SolveFrom left it.
+void MeasureRotationFromMatches(const std::vector<Correspondence>& cs, const Eigen::Matrix3d& r_fit,
+                                const Eigen::Matrix3d& r_prior, const Eigen::Vector3d& t_prior,
+                                const Eigen::Matrix<double, 6, 6>& prior_cov, double f,
+                                const PredictionOptions& prediction,
+                                const MotionRefitOptions& options, MotionRefit& out) {
+  Eigen::Matrix3d r = r_fit;
+  Eigen::Vector3d t = out.motion.cam_b_from_cam_a.translation;
+  const double sigma = out.sigma_px;
+  const double max_dedt2 = MaxEpipolarDedt2(f, prediction);
+  auto from_prior = [&] {
+    Eigen::Matrix<double, 6, 1> d;
+    d.head<3>() = LogSO3(Eigen::Quaterniond(r * r_prior.transpose()));
+    d.tail<3>() = t - t_prior;
+    return d;
+  };
 
   // The rotation the matches alone measure, for a gyro bias filter (ImuRotationFromFit): the
   // same residuals from the fit on, with the prior's translation information only (the epipolar
@@ -271,11 +305,11 @@ MotionRefit SolveFrom(const Eigen::Vector3d& t_from, const std::vector<Correspon
   for (int iteration = 0; iteration < 3 * options.iterations && !converged; ++iteration) {
     Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
     Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
-    for (size_t i = 0; i < cs.size(); ++i) {
-      Row& row = rs[i];
-      residual(cs[i], row);
+    for (const Correspondence& c : cs) {
+      Row row;
+      ComputeRow(c, r, t, f, max_dedt2, row);
       if (row.rows == 0) continue;
-      const double w = cauchy_weight(row, c2) * row.scale;
+      const double w = CauchyWeight(row, c2) * row.scale;
       AccumulateUpper(row.j, row.e, row.rows, w, h, g);
     }
     MirrorUpper(h);
@@ -299,7 +333,6 @@ MotionRefit SolveFrom(const Eigen::Vector3d& t_from, const std::vector<Correspon
       out.rotation_from_matches_covariance = cov_theta;
     }
   }
-  return out;
 }
 
 // Of two fits of the same matches from different starts: one that holds beats one that does not;
@@ -437,20 +470,29 @@ MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& mat
     }
   }
 
-  auto solve = [&](const Eigen::Vector3d& t_from) {
-    return SolveFrom(t_from, cs, base, r_prior, t_prior, prior_cov, prior_info, f, prediction,
-                     options);
+  auto solve = [&](const Eigen::Vector3d& t_from, Eigen::Matrix3d* r_fit) {
+    return SolveFrom(t_from, cs, base, r_prior, t_prior, prior_info, f, prediction, options, r_fit);
   };
-  MotionRefit first = solve(t_start);
-  if (!second_start) return first;
+  // The rotation the matches alone show, of the fit returned only (not of a fit that a second
+  // start replaces).
+  auto measured = [&](MotionRefit fit, const Eigen::Matrix3d& r_fit) {
+    if (fit.ok && options.measure_rotation) {
+      MeasureRotationFromMatches(cs, r_fit, r_prior, t_prior, prior_cov, f, prediction, options,
+                                 fit);
+    }
+    return fit;
+  };
+  Eigen::Matrix3d r_first = r_prior, r_second = r_prior;
+  MotionRefit first = solve(t_start, &r_first);
+  if (!second_start) return measured(first, r_first);
   // The first fit's direction at the prior's length, under the search's cost: when the searched
   // start explains the matches better, the first fit settled in a wrong minimum.
   const double cost_first = TranslationDirectionCost(
       ra_prior, xb_all, t_prior.norm() * first.motion.cam_b_from_cam_a.translation.normalized(), f,
       start_sigma, options.cauchy_scale, t_prior, prior_info.bottomRightCorner<3, 3>());
-  if (!(searched.cost < cost_first)) return first;
-  MotionRefit second = solve(searched.translation);
-  return FitIsBetter(second, first) ? second : first;
+  if (!(searched.cost < cost_first)) return measured(first, r_first);
+  MotionRefit second = solve(searched.translation, &r_second);
+  return FitIsBetter(second, first) ? measured(second, r_second) : measured(first, r_first);
 }
 
 std::optional<ImuRotationMeasurement> ImuRotationFromFit(const MotionRefit& refit,
