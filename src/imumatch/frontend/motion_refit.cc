@@ -144,6 +144,17 @@ void MirrorUpper(Eigen::Matrix<double, 6, 6>& h) {
   }
 }
 
+// The perturbation [dtheta; dt] from the prior (r_prior, t_prior) to the motion (r, t), in
+// CameraMotion's convention (MotionPerturbation), on the iterated rotation matrices.
+Eigen::Matrix<double, 6, 1> PriorOffset(const Eigen::Matrix3d& r, const Eigen::Vector3d& t,
+                                        const Eigen::Matrix3d& r_prior,
+                                        const Eigen::Vector3d& t_prior) {
+  Eigen::Matrix<double, 6, 1> d;
+  d.head<3>() = LogSO3(Eigen::Quaterniond(r * r_prior.transpose()));
+  d.tail<3>() = t - t_prior;
+  return d;
+}
+
 // Gauss-Newton from the prior's rotation and translation t_from (see RefitMotion). When the fit
 // holds, *r_out (if given) receives its rotation as iterated.
 MotionRefit SolveFrom(const Eigen::Vector3d& t_from, const std::vector<Correspondence>& cs,
@@ -154,18 +165,10 @@ MotionRefit SolveFrom(const Eigen::Vector3d& t_from, const std::vector<Correspon
   MotionRefit out = base;
   Eigen::Matrix3d r = r_prior;
   Eigen::Vector3d t = t_from;
-  auto from_prior = [&] {
-    Eigen::Matrix<double, 6, 1> d;
-    d.head<3>() = LogSO3(Eigen::Quaterniond(r * r_prior.transpose()));
-    d.tail<3>() = t - t_prior;
-    return d;
-  };
+  auto from_prior = [&] { return PriorOffset(r, t, r_prior, t_prior); };
 
   double sigma = options.min_residual_px;
   const double max_dedt2 = MaxEpipolarDedt2(f, prediction);
-  auto residual = [&](const Correspondence& c, Row& row) {
-    ComputeRow(c, r, t, f, max_dedt2, row);
-  };
 
   // Per iteration: every residual and Jacobian once; while reweighting, their robust sigma and
   // Cauchy weights; then the normal equations of the weighted residuals and the prior.
@@ -185,7 +188,7 @@ MotionRefit SolveFrom(const Eigen::Vector3d& t_from, const std::vector<Correspon
     abs_rows.clear();
     for (size_t i = 0; i < cs.size(); ++i) {
       Row& row = rs[i];
-      residual(cs[i], row);
+      ComputeRow(cs[i], r, t, f, max_dedt2, row);
       if (row.rows == 0) continue;
       abs_rows.push_back(std::fabs(row.e[0]));
       if (row.rows == 2) abs_rows.push_back(std::fabs(row.e[1]));
@@ -284,12 +287,7 @@ void MeasureRotationFromMatches(const std::vector<Correspondence>& cs, const Eig
   Eigen::Vector3d t = out.motion.cam_b_from_cam_a.translation;
   const double sigma = out.sigma_px;
   const double max_dedt2 = MaxEpipolarDedt2(f, prediction);
-  auto from_prior = [&] {
-    Eigen::Matrix<double, 6, 1> d;
-    d.head<3>() = LogSO3(Eigen::Quaterniond(r * r_prior.transpose()));
-    d.tail<3>() = t - t_prior;
-    return d;
-  };
+  auto from_prior = [&] { return PriorOffset(r, t, r_prior, t_prior); };
 
   // The rotation the matches alone measure, for a gyro bias filter (ImuRotationFromFit): the
   // same residuals from the fit on, with the prior's translation information only (the epipolar
