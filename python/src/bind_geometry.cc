@@ -118,10 +118,11 @@ Names say the frames (``world_from_cam``, ``cam_b_from_cam_a``), as in the C++ l
       py::arg("a"), py::arg("b"), "Angle of the rotation between two poses' rotations (degrees).");
 
   // -------------------------------------------------------------------------------- camera
-  py::class_<PinholeCamera>(m, "PinholeCamera", R"(Pinhole camera with radial-tangential distortion.
+  py::class_<PinholeCamera>(m, "PinholeCamera", R"(Pinhole camera with lens distortion.
 
 Pixel-centre convention: integer coordinates are pixel centres (OpenCV's), so the image spans
-[-0.5, width - 0.5]. ``distortion`` is OpenCV's (k1, k2, p1, p2, k3). "Ideal" pixels are
+[-0.5, width - 0.5]. ``distortion`` is OpenCV's (k1, k2, p1, p2, k3), or (k1, k2, k3, k4, 0)
+when ``model`` is 'equidistant'. "Ideal" pixels are
 K x the undistorted bearing: where the guided matcher predicts and searches.)")
       .def(py::init<>(), "640 x 480, f = 525, c = (319.5, 239.5), no distortion, depth scale 5000.")
       .def(py::init([](int width, int height, double fx, double fy, double cx, double cy,
@@ -147,13 +148,28 @@ K x the undistorted bearing: where the guided matcher predicts and searches.)")
       .def_readwrite("fy", &PinholeCamera::fy, "Focal length y (px).")
       .def_readwrite("cx", &PinholeCamera::cx, "Principal point x (px, pixel centres at integers).")
       .def_readwrite("cy", &PinholeCamera::cy, "Principal point y (px).")
-      .def_readwrite("distortion", &PinholeCamera::distortion, "(k1, k2, p1, p2, k3)")
+      .def_readwrite("distortion", &PinholeCamera::distortion,
+                     "(k1, k2, p1, p2, k3); equidistant: (k1, k2, k3, k4, 0)")
+      .def_property(
+          "model", [](const PinholeCamera& c) { return std::string(ToString(c.model)); },
+          [](PinholeCamera& c, const std::string& name) {
+            if (name == "radial-tangential" || name == "radtan") {
+              c.model = DistortionModel::kRadialTangential;
+            } else if (name == "equidistant") {
+              c.model = DistortionModel::kEquidistant;
+            } else {
+              throw InvalidArgument("model must be 'radial-tangential' or 'equidistant', not '" +
+                                    name + "'");
+            }
+          },
+          "Lens model: 'radial-tangential' (default) or 'equidistant' (Kannala-Brandt, "
+          "Kalibr's 'equidistant').")
       .def_readwrite("depth_scale", &PinholeCamera::depth_scale,
                      "Raw depth units per metre (TUM: 5000).")
       .def("check", &PinholeCamera::Check, "Raises ValueError on invalid values.")
       .def_property_readonly("K", &PinholeCamera::K, "3 x 3 intrinsic matrix.")
       .def("has_distortion", &PinholeCamera::HasDistortion,
-           "Whether any distortion coefficient is non-zero.")
+           "Whether the lens distorts (a non-zero coefficient, or the equidistant model).")
       .def_static("euroc_cam0", &PinholeCamera::EurocCam0, "EuRoC MAV cam0 (752 x 480, distorted).")
       .def_static("kinect_default", &PinholeCamera::KinectDefault,
                   "TUM's default Kinect intrinsics (no distortion).")

@@ -37,6 +37,26 @@ def test_distortion_agrees_with_opencv_projectpoints():
     assert np.abs(cam.distort(ideal) - uv).max() < 1e-6
 
 
+def test_equidistant_agrees_with_opencv_fisheye():
+    cam = imumatch.PinholeCamera(752, 480, 380.0, 379.0, 370.0, 245.0,
+                                 distortion=[-0.02, 0.01, -0.004, 0.0005, 0.0])
+    assert cam.model == "radial-tangential"
+    cam.model = "equidistant"
+    cam.check()
+    assert cam.has_distortion()
+    rng = np.random.default_rng(5)
+    uv = np.column_stack([rng.uniform(0, cam.width - 1, 200), rng.uniform(0, cam.height - 1, 200)])
+    ideal = cam.undistort(uv)
+    # OpenCV's fisheye model (an independent implementation of Kannala-Brandt) on the bearings.
+    bearings = np.column_stack([(ideal[:, 0] - cam.cx) / cam.fx, (ideal[:, 1] - cam.cy) / cam.fy])
+    projected = cv2.fisheye.distortPoints(bearings.reshape(-1, 1, 2), cam.K,
+                                          np.array(cam.distortion[:4]))
+    assert np.abs(projected.reshape(-1, 2) - uv).max() < 1e-4
+    assert np.abs(cam.distort(ideal) - uv).max() < 1e-6
+    with pytest.raises(ValueError):
+        cam.model = "omnidirectional"
+
+
 def test_rigid_compose_inverse_and_transform():
     a = imumatch.Rigid3d.from_quaternion(math.cos(0.3), 0.0, 0.0, math.sin(0.3), [1.0, 2.0, 3.0])
     b = imumatch.Rigid3d(cv2.Rodrigues(np.array([0.1, -0.2, 0.3]))[0], [0.5, 0.0, -1.0])

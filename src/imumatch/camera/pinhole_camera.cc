@@ -1,5 +1,6 @@
 #include "imumatch/camera/pinhole_camera.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -12,6 +13,53 @@
 
 namespace imumatch {
 
+const char* ToString(DistortionModel model) {
+  return model == DistortionModel::kEquidistant ? "equidistant" : "radial-tangential";
+}
+
+namespace {
+
+// The equidistant (Kannala-Brandt) radius on the z=1 plane at ray angle theta, and its derivative.
+double KbRadius(const std::array<double, 5>& k, double theta, double* derivative) {
+  const double t2 = theta * theta;
+  const double poly = 1.0 + t2 * (k[0] + t2 * (k[1] + t2 * (k[2] + t2 * k[3])));
+  if (derivative != nullptr) {
+    // d/dtheta [theta poly(t2)] = poly + theta * 2 theta poly'(t2).
+    const double dpoly = k[0] + t2 * (2.0 * k[1] + t2 * (3.0 * k[2] + t2 * 4.0 * k[3]));
+    *derivative = poly + 2.0 * t2 * dpoly;
+  }
+  return theta * poly;
+}
+
+// The ray angle in [0, pi/2) whose equidistant radius is `radius` (Newton from theta = radius,
+// kept inside the bracket), or NaN when there is none below pi/2 (or the map is not increasing
+// on the way).
+double KbAngle(const std::array<double, 5>& k, double radius) {
+  constexpr double kHalfPi = 1.5707963267948966;
+  if (!(radius >= 0.0)) return std::numeric_limits<double>::quiet_NaN();
+  double lo = 0.0, hi = kHalfPi;
+  if (!(KbRadius(k, hi, nullptr) > radius)) return std::numeric_limits<double>::quiet_NaN();
+  double theta = std::min(radius, 0.5 * (lo + hi));
+  for (int it = 0; it < 60; ++it) {
+    double slope = 0.0;
+    const double f = KbRadius(k, theta, &slope) - radius;
+    (f > 0.0 ? hi : lo) = theta;
+    if (std::abs(f) <= 1e-15 * std::max(1.0, radius)) break;
+    double next = slope > 0.0 ? theta - f / slope : 0.5 * (lo + hi);
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);  // a Newton step out of the bracket
+    if (next == theta) break;
+    theta = next;
+  }
+  return theta;
+}
+
+}  // namespace
+
+double PinholeCamera::EquidistantRadius(double theta, double* derivative) const {
+  return KbRadius(distortion, theta, derivative);
+}
+double PinholeCamera::EquidistantAngle(double radius) const { return KbAngle(distortion, radius); }
+
 void PinholeCamera::Check() const {
   IMUMATCH_CHECK(width > 0 && height > 0 && width <= kMaxSide && height <= kMaxSide,
                  "image size " << width << "x" << height << " (1.." << kMaxSide << " a side)");
@@ -20,9 +68,44 @@ void PinholeCamera::Check() const {
   IMUMATCH_CHECK(std::isfinite(cx) && std::isfinite(cy), "principal point");
   IMUMATCH_CHECK(std::isfinite(depth_scale) && depth_scale > 0, "depth_scale=" << depth_scale);
   for (double d : distortion) IMUMATCH_CHECK(std::isfinite(d), "distortion coefficient");
+  IMUMATCH_CHECK(
+      model == DistortionModel::kRadialTangential || model == DistortionModel::kEquidistant,
+      "unknown distortion model " << static_cast<int>(model));
+  if (model != DistortionModel::kEquidistant) return;
+  IMUMATCH_CHECK(distortion[4] == 0.0,
+                 "an equidistant lens has four coefficients k1..k4 (the fifth must be 0)");
+  // The farthest image point from the axis is a corner (the squared normalised radius is convex).
+  double corner = 0.0;
+  for (const double u : {-0.5, width - 0.5}) {
+    for (const double v : {-0.5, height - 0.5}) {
+      corner = std::max(corner, std::hypot((u - cx) / fx, (v - cy) / fy));
+    }
+  }
+  const double max_theta = kMaxEquidistantAngleDeg * 3.14159265358979323846 / 180.0;
+  // theta (1 + ...) must increase from 0 to the corner's angle (else two rays share an image
+  // point): checked every 0.5 deg, and the corner must be reached before max_theta.
+  for (double theta = 0.0; theta <= max_theta; theta += 0.5 * 3.14159265358979323846 / 180.0) {
+    double slope = 0.0;
+    const double radius = KbRadius(distortion, theta, &slope);
+    if (!(slope > 0.0)) {
+      std::ostringstream m;
+      m << "equidistant lens k=[" << distortion[0] << " " << distortion[1] << " " << distortion[2]
+        << " " << distortion[3] << "]: the image radius stops growing at "
+        << theta * 180.0 / 3.14159265358979323846
+        << " deg from the optical axis, before the image corners (two rays would share a pixel)";
+      throw InvalidArgument(m.str());
+    }
+    if (radius >= corner) return;
+  }
+  std::ostringstream m;
+  m << "equidistant lens: the image corners lie more than " << kMaxEquidistantAngleDeg
+    << " deg from the optical axis; the matcher works on a pinhole image of the undistorted rays, "
+       "which cannot hold them (a fisheye this wide is not supported)";
+  throw InvalidArgument(m.str());
 }
 
 bool PinholeCamera::HasDistortion() const {
+  if (model == DistortionModel::kEquidistant) return true;
   for (double d : distortion) {
     if (d != 0.0) return true;
   }
@@ -37,6 +120,24 @@ Eigen::Matrix3d PinholeCamera::K() const {
 
 Eigen::Vector2d PinholeCamera::DistortNormalized(const Eigen::Vector2d& xy,
                                                  Eigen::Matrix2d* jacobian) const {
+  if (model == DistortionModel::kEquidistant) {
+    // xy_d = s(r) xy with r = |xy|, s = radius(atan r) / r; J = s I + (s'(r) / r) xy xy^T.
+    const double r2 = xy.squaredNorm();
+    if (r2 < 1e-24) {  // on the axis: s -> 1, s' -> 0
+      if (jacobian != nullptr) jacobian->setIdentity();
+      return xy;
+    }
+    const double r = std::sqrt(r2), theta = std::atan(r);
+    double dradius_dtheta = 0.0;
+    const double radius = KbRadius(distortion, theta, &dradius_dtheta);
+    const double s = radius / r;
+    if (jacobian != nullptr) {
+      const double dradius_dr = dradius_dtheta / (1.0 + r2);
+      const double ds_dr_over_r = (dradius_dr - s) / r2;  // (r radius' - radius) / r^3
+      *jacobian = s * Eigen::Matrix2d::Identity() + ds_dr_over_r * xy * xy.transpose();
+    }
+    return s * xy;
+  }
   const auto& [k1, k2, p1, p2, k3] = distortion;
   const RadTan e = EvalRadTan(k1, k2, p1, p2, k3, xy.x(), xy.y());
   if (jacobian != nullptr) *jacobian << e.j00, e.j01, e.j01, e.j11;
@@ -51,6 +152,13 @@ Eigen::Vector2d PinholeCamera::NormalizedToPixel(const Eigen::Vector2d& xy) cons
 Eigen::Vector2d PinholeCamera::PixelToNormalized(const Eigen::Vector2d& uv) const {
   const Eigen::Vector2d distorted = IdealToNormalized(uv);
   if (!HasDistortion()) return distorted;
+  if (model == DistortionModel::kEquidistant) {
+    // Radial: the ray angle of the distorted radius, then r = tan(theta) along the same direction.
+    const double radius = distorted.norm();
+    if (radius < 1e-12) return distorted;
+    const double theta = KbAngle(distortion, radius);
+    return distorted * (std::tan(theta) / radius);  // NaN beyond 90 deg
+  }
   // Newton on the distortion model with its analytic Jacobian; converges in a few steps for points
   // inside the image (the model is monotonic there).
   Eigen::Vector2d xy = distorted;
@@ -162,6 +270,7 @@ std::string PinholeCamera::ToString() const {
   std::ostringstream out;
   out << width << "x" << height << " fx=" << fx << " fy=" << fy << " cx=" << cx << " cy=" << cy;
   if (HasDistortion()) {
+    if (model == DistortionModel::kEquidistant) out << " equidistant";
     out << " d=[" << distortion[0] << " " << distortion[1] << " " << distortion[2] << " "
         << distortion[3] << " " << distortion[4] << "]";
   }
@@ -180,7 +289,17 @@ PinholeCamera ParseCameraFromText(const std::string& text, const std::string& so
     std::istringstream fields(line);
     std::vector<double> v;
     std::string token;
+    // An optional first word names the lens model (default radial-tangential).
+    DistortionModel model = DistortionModel::kRadialTangential;
+    bool first = true;
     while (fields >> token) {
+      if (first && (token == "equidistant" || token == "radtan" || token == "radial-tangential")) {
+        model = token == "equidistant" ? DistortionModel::kEquidistant
+                                       : DistortionModel::kRadialTangential;
+        first = false;
+        continue;
+      }
+      first = false;
       char* end = nullptr;
       const double d = std::strtod(token.c_str(), &end);
       if (end != token.c_str() + token.size() || !std::isfinite(d)) {
@@ -188,13 +307,20 @@ PinholeCamera ParseCameraFromText(const std::string& text, const std::string& so
       }
       v.push_back(d);
     }
-    if (v.empty()) continue;
+    if (v.empty() && model == DistortionModel::kRadialTangential) continue;
+    if (model == DistortionModel::kEquidistant && v.size() != 10) {
+      throw InputError(source_name, line_no,
+                       "expected 'equidistant fx fy cx cy width height k1 k2 k3 k4', got " +
+                           std::to_string(v.size()) + " numbers");
+    }
     if (v.size() != 4 && (v.size() < 6 || v.size() > 11)) {
       throw InputError(source_name, line_no,
-                       "expected 'fx fy cx cy [width height [k1 k2 p1 p2 [k3]]]', got " +
+                       "expected '[radtan|equidistant] fx fy cx cy [width height [k1 k2 p1 p2 "
+                       "[k3]]]', got " +
                            std::to_string(v.size()) + " numbers");
     }
     PinholeCamera c;
+    c.model = model;
     c.fx = v[0];
     c.fy = v[1];
     c.cx = v[2];

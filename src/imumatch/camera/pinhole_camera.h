@@ -32,8 +32,14 @@ struct RadTan {
   return e;
 }
 
-// Pinhole camera with optional radial-tangential (OpenCV "plumb bob": k1 k2 p1 p2 k3) distortion
-// and a depth scale for 16-bit depth images.
+// The lens models: radial-tangential (OpenCV "plumb bob", Kalibr "radtan": k1 k2 p1 p2 k3 on the
+// z=1 plane) and equidistant (Kannala-Brandt KB4, Kalibr "equidistant", OpenCV cv::fisheye: the
+// angle theta of a ray from the axis maps to the radius theta (1 + k1 theta^2 + k2 theta^4 +
+// k3 theta^6 + k4 theta^8) on the normalised image plane).
+enum class DistortionModel { kRadialTangential, kEquidistant };
+const char* ToString(DistortionModel model);
+
+// Pinhole camera with optional lens distortion and a depth scale for 16-bit depth images.
 //
 // Pixel-centre convention (the OpenCV one): integer pixel coordinates are pixel centres. Pixel
 // (0,0) covers [-0.5, 0.5) x [-0.5, 0.5); the image spans [-0.5, width-0.5) x [-0.5, height-0.5).
@@ -45,16 +51,25 @@ struct PinholeCamera {
   double fy = 525.0;
   double cx = 319.5;
   double cy = 239.5;
-  // k1, k2, p1, p2, k3. All zero means no distortion.
+  // Radial-tangential: k1, k2, p1, p2, k3; all zero means no distortion. Equidistant: k1, k2, k3,
+  // k4 and a fifth entry that must be 0; an equidistant lens always distorts (theta is not
+  // tan theta), also with all coefficients zero.
+  DistortionModel model = DistortionModel::kRadialTangential;
   std::array<double, 5> distortion = {0, 0, 0, 0, 0};
+  // The largest angle from the optical axis (degrees) an equidistant camera's image may reach:
+  // the matcher works in "ideal" pixels (a pinhole image, straight epipolar lines), which reach
+  // infinity at 90 deg; at 80 deg they are 5.7 focal lengths from the centre. A wider lens
+  // (most fisheyes of 180 deg and more) is refused by Check().
+  static constexpr double kMaxEquidistantAngleDeg = 80.0;
   // Raw depth units per metre: TUM and Kinect PNGs store 5000 per metre (value / 5000 = metres).
   double depth_scale = 5000.0;
 
   // The largest image side a camera may have (pixels): bounds every per-pixel buffer.
   static constexpr int kMaxSide = 32768;
 
-  // Throws InvalidArgument for a non-positive size, focal length or depth scale, or non-finite
-  // values.
+  // Throws InvalidArgument for a non-positive size, focal length or depth scale, non-finite
+  // values, or an equidistant lens whose image corners lie beyond kMaxEquidistantAngleDeg from
+  // the axis (or whose angle-to-radius map is not increasing up to them).
   void Check() const;
 
   bool HasDistortion() const;
@@ -69,9 +84,17 @@ struct PinholeCamera {
   // z=1 plane point -> pixel (distorted).
   Eigen::Vector2d NormalizedToPixel(const Eigen::Vector2d& xy) const;
   // The distortion on the z=1 plane, xy -> xy_distorted, and (when jacobian is given) its 2x2
-  // Jacobian d xy_distorted / d xy, analytic. The identity without distortion.
+  // Jacobian d xy_distorted / d xy, analytic (symmetric for both models). The identity without
+  // distortion. PixelToNormalized inverts it (NaN where an equidistant image point lies 90 deg or
+  // more from the axis: no point of the z=1 plane maps there).
   Eigen::Vector2d DistortNormalized(const Eigen::Vector2d& xy,
                                     Eigen::Matrix2d* jacobian = nullptr) const;
+
+  // Equidistant lens: the radius on the normalised image plane of a ray at angle theta from the
+  // axis (and its derivative d radius / d theta), and the inverse: the angle in [0, pi/2) of a
+  // radius (NaN when no ray below 90 deg lands there).
+  double EquidistantRadius(double theta, double* derivative = nullptr) const;
+  double EquidistantAngle(double radius) const;
 
   // "Ideal" pixels: the pinhole image K [x y 1] of the undistorted bearing (x, y). They equal the
   // image pixels for a camera without distortion; in them the epipolar geometry is straight lines.

@@ -83,6 +83,95 @@ TEST(PinholeCamera, ScaledToWidthKeepsTheImageEdges) {
   EXPECT_THROW(big.ScaledToWidth(0), InvalidArgument);
 }
 
+// Kannala-Brandt by hand: a ray at theta = 45 deg (the point (1, 0) on the z=1 plane) lands at
+// radius theta (1 + k1 theta^2) = (pi/4)(1 + 0.1 pi^2/16) = 0.83384547071 on the normalised plane;
+// off-axis points keep their direction (r = 0.5, theta = atan 0.5, with k2 = -0.02 too).
+TEST(PinholeCamera, EquidistantMapsTheRayAngleToTheRadius) {
+  PinholeCamera cam;
+  cam.model = DistortionModel::kEquidistant;
+  cam.distortion = {0.1, 0.0, 0.0, 0.0, 0.0};
+  EXPECT_TRUE(cam.HasDistortion());
+  EXPECT_NEAR(cam.DistortNormalized(Eigen::Vector2d(1.0, 0.0)).x(), 0.8338454707104168, 1e-14);
+  EXPECT_NEAR(cam.DistortNormalized(Eigen::Vector2d(1.0, 0.0)).y(), 0.0, 1e-15);
+  cam.distortion = {0.1, -0.02, 0.0, 0.0, 0.0};
+  const Eigen::Vector2d d = cam.DistortNormalized(Eigen::Vector2d(0.3, 0.4));
+  EXPECT_NEAR(d.x(), 0.28391164868131097, 1e-14);
+  EXPECT_NEAR(d.y(), 0.37854886490841466, 1e-14);
+  // All coefficients zero is still a lens (theta, not tan theta): 45 deg at radius pi/4.
+  cam.distortion = {0, 0, 0, 0, 0};
+  EXPECT_TRUE(cam.HasDistortion());
+  EXPECT_NEAR(cam.DistortNormalized(Eigen::Vector2d(0.0, -1.0)).y(), -0.7853981633974483, 1e-15);
+  // On the axis: the identity.
+  EXPECT_EQ(cam.DistortNormalized(Eigen::Vector2d(0.0, 0.0)), Eigen::Vector2d(0.0, 0.0));
+}
+
+// Pixel -> ray -> pixel over the whole image of a strong equidistant lens (corners near 60 deg).
+TEST(PinholeCamera, EquidistantRoundTrip) {
+  PinholeCamera cam;
+  cam.width = 752;
+  cam.height = 480;
+  cam.fx = cam.fy = 380.0;
+  cam.cx = 370.0;
+  cam.cy = 245.0;
+  cam.model = DistortionModel::kEquidistant;
+  cam.distortion = {-0.02, 0.01, -0.004, 0.0005, 0.0};
+  cam.Check();
+  double worst = 0.0;
+  for (double v = -0.5; v <= 479.5; v += 23.9) {
+    for (double u = -0.5; u <= 751.5; u += 18.7) {
+      const Eigen::Vector2d uv(u, v);
+      const Eigen::Vector2d xy = cam.PixelToNormalized(uv);
+      ASSERT_TRUE(xy.allFinite()) << uv.transpose();
+      worst = std::max(worst, (cam.NormalizedToPixel(xy) - uv).norm());
+      // The ray's angle is the model's inverse: radius(theta) = |normalised distorted point|.
+      const double theta = std::atan(xy.norm());
+      const double radius = std::hypot((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy);
+      const double t2 = theta * theta;
+      EXPECT_NEAR(theta * (1 - 0.02 * t2 + 0.01 * t2 * t2 - 0.004 * t2 * t2 * t2 +
+                           0.0005 * t2 * t2 * t2 * t2),
+                  radius, 1e-12);
+    }
+  }
+  EXPECT_LT(worst, 1e-9);
+  // And 3-D: a point projected and unprojected with its depth.
+  const Eigen::Vector3d p(-1.2, 0.7, 1.5);
+  const auto uv = cam.Project(p);
+  ASSERT_TRUE(uv.has_value());
+  EXPECT_LT((cam.Unproject(*uv, 1.5) - p).norm(), 1e-9);
+}
+
+TEST(PinholeCamera, EquidistantCheckRefusesWhatIdealPixelsCannotHold) {
+  PinholeCamera cam;
+  cam.width = 752;
+  cam.height = 480;
+  cam.fx = cam.fy = 380.0;
+  cam.cx = 370.0;
+  cam.cy = 245.0;
+  cam.model = DistortionModel::kEquidistant;
+  EXPECT_NO_THROW(cam.Check());
+  // A fisheye: corners sqrt(376^2 + 240^2) / 150 = 2.97 rad (170 deg) from the axis.
+  PinholeCamera wide = cam;
+  wide.fx = wide.fy = 150.0;
+  EXPECT_THROW(wide.Check(), InvalidArgument);
+  // k1 = -0.5: theta - 0.5 theta^3 stops growing at theta = 47 deg (radius 0.54), short of the
+  // corners' radius 1.18.
+  PinholeCamera folding = cam;
+  folding.distortion = {-0.5, 0.0, 0.0, 0.0, 0.0};
+  EXPECT_THROW(folding.Check(), InvalidArgument);
+  // Four coefficients only.
+  PinholeCamera five = cam;
+  five.distortion = {0.0, 0.0, 0.0, 0.0, 0.01};
+  EXPECT_THROW(five.Check(), InvalidArgument);
+  // Beyond 90 deg no ray of the z=1 plane lands: NaN, not a folded point.
+  PinholeCamera beyond = cam;
+  beyond.width = 100;
+  beyond.height = 100;
+  beyond.cx = beyond.cy = 49.5;
+  beyond.Check();
+  EXPECT_FALSE(beyond.PixelToNormalized(Eigen::Vector2d(49.5 + 380.0 * 1.7, 49.5)).allFinite());
+  EXPECT_TRUE(beyond.PixelToNormalized(Eigen::Vector2d(49.5 + 380.0 * 1.5, 49.5)).allFinite());
+}
+
 TEST(PinholeCamera, ParsesTextIntrinsics) {
   const PinholeCamera c =
       ParseCameraFromText("# TUM fr1\n\n517.3 516.5 318.6 255.3 640 480\n", "x");
@@ -93,6 +182,24 @@ TEST(PinholeCamera, ParsesTextIntrinsics) {
   const PinholeCamera d =
       ParseCameraFromText("500 500 320 240 640 480 0.1 -0.2 0.001 0.002 0.05", "x");
   EXPECT_DOUBLE_EQ(d.distortion[4], 0.05);
+  EXPECT_EQ(d.model, DistortionModel::kRadialTangential);
+  const PinholeCamera e =
+      ParseCameraFromText("equidistant 380 380 370 245 752 480 -0.02 0.01 -0.004 0.0005", "x");
+  EXPECT_EQ(e.model, DistortionModel::kEquidistant);
+  EXPECT_DOUBLE_EQ(e.distortion[3], 0.0005);
+  EXPECT_NE(e.ToString().find("equidistant"), std::string::npos);
+  // An equidistant lens needs its size and all four coefficients; a fifth is refused.
+  EXPECT_THROW(ParseCameraFromText("equidistant 380 380 370 245", "x"), InputError);
+  EXPECT_THROW(ParseCameraFromText("equidistant 380 380 370 245 752 480 0 0 0 0 0", "x"),
+               InputError);
+  // A fisheye the matcher cannot hold: the error names the line.
+  try {
+    ParseCameraFromText("\nequidistant 150 150 370 245 752 480 0 0 0 0", "cam.txt");
+    FAIL() << "expected InputError";
+  } catch (const InputError& err) {
+    EXPECT_EQ(err.line(), 2);
+    EXPECT_NE(std::string(err.what()).find("80 deg"), std::string::npos) << err.what();
+  }
 }
 
 TEST(PinholeCamera, TextErrorsNameFileAndLine) {

@@ -28,6 +28,33 @@ PixelUndistorter::PixelUndistorter(const PinholeCamera& camera, double cell_px) 
           camera.PixelToNormalized(Eigen::Vector2d(origin_ + c * cell_, origin_ + r * cell_));
     }
   }
+  if (camera.model == DistortionModel::kEquidistant) {
+    // g(rho) = tan(theta) / rho and g'(rho) = (rho sec^2(theta) / radius'(theta) - tan(theta)) /
+    // rho^2 up to the table's farthest node (the image corners plus a cell), 4096 steps: the
+    // cubic Hermite interpolation's error (h^4 / 384 times g's fourth derivative) is far below a
+    // float's rounding.
+    double max_rho = 0.0;
+    for (const double u : {origin_, origin_ + (cols_ - 1) * cell_}) {
+      for (const double v : {origin_, origin_ + (rows_ - 1) * cell_}) {
+        max_rho =
+            std::max(max_rho, std::hypot((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy));
+      }
+    }
+    constexpr int kSteps = 4096;
+    radial_step_ = max_rho / kSteps;
+    inv_radial_step_ = 1.0 / radial_step_;
+    radial_g_.assign(kSteps + 2, 1.0);  // node 0, on the axis: g = 1, g' = 0 (g is even)
+    radial_dg_.assign(kSteps + 2, 0.0);
+    for (int k = 1; k < kSteps + 2; ++k) {
+      const double rho = k * radial_step_;
+      const double theta = camera.EquidistantAngle(rho);
+      double slope = 0.0;
+      camera.EquidistantRadius(theta, &slope);
+      const double t = std::tan(theta), sec2 = 1.0 + t * t;
+      radial_g_[k] = t / rho;
+      radial_dg_[k] = (rho * sec2 / slope - t) / (rho * rho);
+    }
+  }
   // The image border mapped to ideal pixels, sampled every pixel: its bounding box.
   Eigen::Vector2d lo, hi;
   camera.IdealImageBounds(1.0, &lo, &hi);
@@ -80,12 +107,16 @@ Eigen::Vector2d PixelUndistorter::ToIdeal(const Eigen::Vector2d& uv,
   } else {
     xy = camera_.PixelToNormalized(uv);  // outside the table (or NaN): the iterative inverse
   }
-  // One Newton step on distort(xy) = target.
+  // One Newton step on distort(xy) = target (two for an equidistant lens, whose ideal pixels
+  // curve more at the corners: the table's start is 1e-4 px off after one step there).
   const Eigen::Vector2d target = camera_.IdealToNormalized(uv);
-  Eigen::Matrix2d j;
-  const Eigen::Vector2d residual = camera_.DistortNormalized(xy, &j) - target;
-  const Eigen::Matrix2d j_inv = j.inverse();
-  xy -= j_inv * residual;
+  Eigen::Matrix2d j, j_inv;
+  const int steps = camera_.model == DistortionModel::kEquidistant ? 2 : 1;
+  for (int step = 0; step < steps; ++step) {
+    const Eigen::Vector2d residual = camera_.DistortNormalized(xy, &j) - target;
+    j_inv = j.inverse();
+    xy -= j_inv * residual;
+  }
   if (ideal_from_pixel != nullptr) {
     // K J^-1 K^-1 (J at the previous iterate: the difference is far below what noise needs).
     *ideal_from_pixel << j_inv(0, 0), j_inv(0, 1) * camera_.fx / camera_.fy,
@@ -185,6 +216,32 @@ void PixelUndistorter::ToIdealInPlace(float* xy, int n, int stride, Path path) c
   IMUMATCH_CHECK(n >= 0 && stride >= 2, "n=" << n << " stride=" << stride);
   IMUMATCH_CHECK(CpuHas(path), "this CPU lacks the instruction set of the requested path");
   if (identity_ || n == 0) return;
+  if (camera_.model == DistortionModel::kEquidistant) {
+    // Radial: the ideal point is g(rho) times the distorted one on the normalised plane, g from
+    // the table by cubic Hermite interpolation (no Newton step, no transcendental function).
+    // Beyond the table (and NaN): ToIdeal.
+    const double fx = camera_.fx, fy = camera_.fy, cx = camera_.cx, cy = camera_.cy;
+    const int last = static_cast<int>(radial_g_.size()) - 2;
+    for (int i = 0; i < n; ++i) {
+      float* p = xy + static_cast<size_t>(i) * stride;
+      const double xd = (p[0] - cx) / fx, yd = (p[1] - cy) / fy;
+      const double s = std::sqrt(xd * xd + yd * yd) * inv_radial_step_;
+      if (!(s < last)) {
+        const Eigen::Vector2d ideal = ToIdeal(Eigen::Vector2d(p[0], p[1]));
+        p[0] = static_cast<float>(ideal.x());
+        p[1] = static_cast<float>(ideal.y());
+        continue;
+      }
+      const int k = static_cast<int>(s);
+      const double t = s - k, t2 = t * t, t3 = t2 * t;
+      const double g =
+          (2 * t3 - 3 * t2 + 1) * radial_g_[k] + (t3 - 2 * t2 + t) * radial_step_ * radial_dg_[k] +
+          (-2 * t3 + 3 * t2) * radial_g_[k + 1] + (t3 - t2) * radial_step_ * radial_dg_[k + 1];
+      p[0] = static_cast<float>(fx * g * xd + cx);
+      p[1] = static_cast<float>(fy * g * yd + cy);
+    }
+    return;
+  }
   static const NewtonRunFn best = SelectNewtonRun(Path::kAuto);
   const NewtonRunFn newton_run = path == Path::kAuto ? best : SelectNewtonRun(path);
   const auto& [k1, k2, p1, p2, k3] = camera_.distortion;

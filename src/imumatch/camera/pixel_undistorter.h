@@ -15,6 +15,8 @@ namespace imumatch {
 // `cell_px` pixels, gives a start within a small fraction of a pixel and one Newton step with the
 // analytic Jacobian finishes it (the error squares: below 1e-6 px for EuRoC's k1 = -0.28 lens).
 // The table is built once per camera. Pixels outside the image fall back to the iterative inverse.
+// An equidistant lens takes two Newton steps (its ideal pixels curve more at the corners) and, in
+// ToIdealInPlace, a radial table (g = tan(theta) / rho by cubic Hermite interpolation).
 // For a camera without distortion every call is the identity.
 class PixelUndistorter {
  public:
@@ -75,6 +77,11 @@ class PixelUndistorter {
   double inv_jac_cell_ = 1.0 / 16.0;
   int jac_cols_ = 0, jac_rows_ = 0;
   std::vector<Eigen::Matrix2f> jac_table_;
+  // Equidistant lens: the undistorted-to-distorted radius ratio g(rho) = tan(theta(rho)) / rho at
+  // rho = k * radial_step_ (k = 0..n-1), with its derivative, for ToIdealInPlace's cubic Hermite
+  // interpolation (x_ideal = g(|x_d|) x_d on the normalised plane).
+  double radial_step_ = 0.0, inv_radial_step_ = 0.0;
+  std::vector<double> radial_g_, radial_dg_;
 };
 
 }  // namespace imumatch

@@ -10,8 +10,23 @@
 namespace imumatch {
 namespace {
 
+// An equidistant lens as strong as EuRoC's (corners near 60 deg from the axis).
+PinholeCamera EquidistantCamera() {
+  PinholeCamera cam;
+  cam.width = 752;
+  cam.height = 480;
+  cam.fx = 380.0;
+  cam.fy = 379.0;
+  cam.cx = 370.0;
+  cam.cy = 245.0;
+  cam.model = DistortionModel::kEquidistant;
+  cam.distortion = {-0.02, 0.01, -0.004, 0.0005, 0.0};
+  return cam;
+}
+
 TEST(PinholeCamera, DistortionJacobianMatchesFiniteDifferences) {
-  for (const PinholeCamera& cam : {PinholeCamera::EurocCam0(), PinholeCamera::TumFreiburg1()}) {
+  for (const PinholeCamera& cam :
+       {PinholeCamera::EurocCam0(), PinholeCamera::TumFreiburg1(), EquidistantCamera()}) {
     for (const Eigen::Vector2d& xy :
          {Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(0.6, -0.4), Eigen::Vector2d(-0.8, 0.5)}) {
       Eigen::Matrix2d j;
@@ -28,46 +43,51 @@ TEST(PinholeCamera, DistortionJacobianMatchesFiniteDifferences) {
 }
 
 TEST(PixelUndistorter, AgreesWithTheForwardModelEverywhereInTheImage) {
-  const PinholeCamera cam = PinholeCamera::EurocCam0();
-  const PixelUndistorter undistorter(cam);
-  EXPECT_FALSE(undistorter.identity());
-  double worst = 0.0;
-  for (double v = -0.5; v <= 479.5; v += 3.7) {
-    for (double u = -0.5; u <= 751.5; u += 4.3) {
-      const Eigen::Vector2d uv(u, v);
-      Eigen::Matrix2d jac;
-      const Eigen::Vector2d ideal = undistorter.ToIdeal(uv, &jac);
-      // The independent truth: the closed-form distortion model maps the result back onto uv.
-      worst = std::max(worst, (cam.IdealToPixel(ideal) - uv).norm());
-      ASSERT_TRUE(undistorter.camera().IsInside(uv));
-      // The Jacobian against central differences of the exact (iterative) inverse.
-      if (std::fmod(u, 40.0) < 4.3 && std::fmod(v, 40.0) < 3.7) {
-        const double h = 1e-3;
-        for (int k = 0; k < 2; ++k) {
-          const Eigen::Vector2d e = h * Eigen::Vector2d::Unit(k);
-          const Eigen::Vector2d numeric =
-              (cam.PixelToIdeal(uv + e) - cam.PixelToIdeal(uv - e)) / (2 * h);
-          EXPECT_LT((jac.col(k) - numeric).norm(), 2e-3) << uv.transpose();
+  for (const PinholeCamera& cam : {PinholeCamera::EurocCam0(), EquidistantCamera()}) {
+    SCOPED_TRACE(ToString(cam.model));
+    const PixelUndistorter undistorter(cam);
+    EXPECT_FALSE(undistorter.identity());
+    double worst = 0.0;
+    for (double v = -0.5; v <= 479.5; v += 3.7) {
+      for (double u = -0.5; u <= 751.5; u += 4.3) {
+        const Eigen::Vector2d uv(u, v);
+        Eigen::Matrix2d jac;
+        const Eigen::Vector2d ideal = undistorter.ToIdeal(uv, &jac);
+        // The independent truth: the closed-form distortion model maps the result back onto uv.
+        worst = std::max(worst, (cam.IdealToPixel(ideal) - uv).norm());
+        ASSERT_TRUE(undistorter.camera().IsInside(uv));
+        // The Jacobian against central differences of the exact (iterative) inverse. ToIdeal takes
+        // it at the table's start, not at the solution: within 0.2 % of its size for EuRoC's
+        // lens, 0.4 % at this equidistant lens's corners (it maps noise, not positions).
+        if (std::fmod(u, 40.0) < 4.3 && std::fmod(v, 40.0) < 3.7) {
+          const double h = 1e-3;
+          for (int k = 0; k < 2; ++k) {
+            const Eigen::Vector2d e = h * Eigen::Vector2d::Unit(k);
+            const Eigen::Vector2d numeric =
+                (cam.PixelToIdeal(uv + e) - cam.PixelToIdeal(uv - e)) / (2 * h);
+            EXPECT_LT((jac.col(k) - numeric).norm(), 4e-3 * numeric.norm()) << uv.transpose();
+          }
         }
       }
     }
+    EXPECT_LT(worst, 1e-5);
+    // A barrel lens: the corners of the image reach further out in ideal pixels than the image.
+    EXPECT_LT(undistorter.ideal_min_x(), -0.5 - 20.0);
+    EXPECT_GT(undistorter.ideal_max_x(), 751.5 + 20.0);
+    const Eigen::Vector2d corner = cam.PixelToIdeal(Eigen::Vector2d(-0.5, -0.5));
+    EXPECT_NEAR(undistorter.ideal_min_x(), std::min(corner.x(), undistorter.ideal_min_x()), 1e-9);
+    // Outside the table: the iterative inverse, still exact.
+    const Eigen::Vector2d outside(-5.0, 490.0);
+    EXPECT_LT((cam.IdealToPixel(undistorter.ToIdeal(outside)) - outside).norm(), 1e-6);
+    EXPECT_LT((undistorter.ToImage(undistorter.ToIdeal(outside)) - outside).norm(), 1e-6);
   }
-  EXPECT_LT(worst, 1e-5);
-  // A barrel lens: the corners of the image reach further out in ideal pixels than the image.
-  EXPECT_LT(undistorter.ideal_min_x(), -0.5 - 20.0);
-  EXPECT_GT(undistorter.ideal_max_x(), 751.5 + 20.0);
-  const Eigen::Vector2d corner = cam.PixelToIdeal(Eigen::Vector2d(-0.5, -0.5));
-  EXPECT_NEAR(undistorter.ideal_min_x(), std::min(corner.x(), undistorter.ideal_min_x()), 1e-9);
-  // Outside the table: the iterative inverse, still exact.
-  const Eigen::Vector2d outside(-5.0, 490.0);
-  EXPECT_LT((cam.IdealToPixel(undistorter.ToIdeal(outside)) - outside).norm(), 1e-6);
-  EXPECT_LT((undistorter.ToImage(undistorter.ToIdeal(outside)) - outside).norm(), 1e-6);
 }
 
 TEST(PixelUndistorter, InPlaceBatchEqualsToIdealOnEveryPath) {
   using Path = PixelUndistorter::Path;
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  for (const PinholeCamera& cam : {PinholeCamera::EurocCam0(), PinholeCamera::TumFreiburg1()}) {
+  for (const PinholeCamera& cam :
+       {PinholeCamera::EurocCam0(), PinholeCamera::TumFreiburg1(), EquidistantCamera()}) {
     const PixelUndistorter undistorter(cam);
     // Points inside the image (a lattice that crosses the 64-point runs), a few outside the
     // table (beyond the image, the iterative inverse) and NaN.

@@ -247,7 +247,9 @@ TEST(Euroc, DepthSensorYamlErrors) {
   ExpectInputError([&] { ReadEurocDepthSensor(none); }, none, 0, "not found");
 }
 
-std::string CameraYaml(const std::string& t_bs_row0, const std::string& distortion_model) {
+std::string CameraYaml(const std::string& t_bs_row0, const std::string& distortion_model,
+                       const std::string& coefficients = "-0.28, 0.07, 0.0002, 1.7e-05",
+                       const std::string& intrinsics = "458.654, 457.296, 367.215, 248.375") {
   return "%YAML:1.0\n"            // 1
          "sensor_type: camera\n"  // 2
          "T_BS:\n"                // 3
@@ -255,18 +257,21 @@ std::string CameraYaml(const std::string& t_bs_row0, const std::string& distorti
          "  rows: 4\n"            // 5
          "  data: [" +
          t_bs_row0 +
-         ",\n"                                                 // 6
-         "         0.0, 1.0, 0.0, 0.0,\n"                      // 7
-         "         0.0, 0.0, 1.0, 0.0,\n"                      // 8
-         "         0.0, 0.0, 0.0, 1.0]\n"                      // 9
-         "rate_hz: 20\n"                                       // 10
-         "resolution: [752, 480]\n"                            // 11
-         "camera_model: pinhole\n"                             // 12
-         "intrinsics: [458.654, 457.296, 367.215, 248.375]\n"  // 13
+         ",\n"                             // 6
+         "         0.0, 1.0, 0.0, 0.0,\n"  // 7
+         "         0.0, 0.0, 1.0, 0.0,\n"  // 8
+         "         0.0, 0.0, 0.0, 1.0]\n"  // 9
+         "rate_hz: 20\n"                   // 10
+         "resolution: [752, 480]\n"        // 11
+         "camera_model: pinhole\n"         // 12
+         "intrinsics: [" +
+         intrinsics +
+         "]\n"  // 13
          "distortion_model: " +
          distortion_model +
-         "\n"                                                          // 14
-         "distortion_coefficients: [-0.28, 0.07, 0.0002, 1.7e-05]\n";  // 15
+         "\n"  // 14
+         "distortion_coefficients: [" +
+         coefficients + "]\n";  // 15
 }
 
 TEST(Euroc, SensorYamlErrors) {
@@ -278,8 +283,23 @@ TEST(Euroc, SensorYamlErrors) {
   const std::string skew =
       dir.Write("a.yaml", CameraYaml("1.0, 0.1, 0.0, 0.1", "radial-tangential"));
   ExpectInputError([&] { ReadEurocCameraSensor(skew); }, skew, 6, "T_BS is not a rigid transform");
-  const std::string fisheye = dir.Write("b.yaml", CameraYaml("1.0, 0.0, 0.0, 0.1", "equidistant"));
-  ExpectInputError([&] { ReadEurocCameraSensor(fisheye); }, fisheye, 14, "not supported");
+  // Kalibr's equidistant (Kannala-Brandt) lens: four coefficients.
+  const std::string equi = dir.Write(
+      "b.yaml", CameraYaml("1.0, 0.0, 0.0, 0.1", "equidistant", "-0.01, 0.002, -0.0005, 0.0001"));
+  const EurocCameraSensor kb = ReadEurocCameraSensor(equi);
+  EXPECT_EQ(kb.camera.model, DistortionModel::kEquidistant);
+  EXPECT_DOUBLE_EQ(kb.camera.distortion[1], 0.002);
+  EXPECT_DOUBLE_EQ(kb.camera.distortion[3], 0.0001);
+  EXPECT_EQ(ReadEurocCameraSensor(ok).camera.model, DistortionModel::kRadialTangential);
+  const std::string equi5 = dir.Write(
+      "b5.yaml", CameraYaml("1.0, 0.0, 0.0, 0.1", "equidistant", "-0.01, 0.002, 0, 0.0001, 0"));
+  ExpectInputError([&] { ReadEurocCameraSensor(equi5); }, equi5, 15, "");
+  const std::string omni = dir.Write("b6.yaml", CameraYaml("1.0, 0.0, 0.0, 0.1", "omni"));
+  ExpectInputError([&] { ReadEurocCameraSensor(omni); }, omni, 14, "not supported");
+  // A fisheye wider than ideal pixels hold (corners 2.7 rad from the axis at fx = 160).
+  const std::string wide = dir.Write("b7.yaml", CameraYaml("1.0, 0.0, 0.0, 0.1", "equidistant",
+                                                           "0, 0, 0, 0", "160, 160, 376, 240"));
+  ExpectInputError([&] { ReadEurocCameraSensor(wide); }, wide, 13, "80 deg");
   const std::string short_row = dir.Write("c.yaml", CameraYaml("1.0, 0.0, 0.0", "radtan"));
   ExpectInputError([&] { ReadEurocCameraSensor(short_row); }, short_row, 6,
                    "expected 16 numbers, got 15");

@@ -9,7 +9,8 @@ const PixelUndistorter& GuidedMatcherWorkspace::UndistorterFor(const PinholeCame
   const PinholeCamera& c = undistorter_.camera();
   const bool same = has_undistorter_ && c.width == camera.width && c.height == camera.height &&
                     c.fx == camera.fx && c.fy == camera.fy && c.cx == camera.cx &&
-                    c.cy == camera.cy && c.distortion == camera.distortion;
+                    c.cy == camera.cy && c.model == camera.model &&
+                    c.distortion == camera.distortion;
   if (!same) {
     undistorter_ = PixelUndistorter(camera);
     has_undistorter_ = true;

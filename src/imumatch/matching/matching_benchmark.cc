@@ -67,10 +67,16 @@ void BM_GuidedFr1Pinhole(benchmark::State& state) {
 }
 
 // Mapping one frame's keypoints to ideal pixels (the TUM fr1 lens): the part of the distorted
-// camera's cost that a stream pays once per frame, not twice per pair.
+// camera's cost that a stream pays once per frame, not twice per pair. Arg equi = 1: the same K as
+// an equidistant lens (k1..k4 = 0: theta instead of tan theta), mapped through its radial table.
 void BM_MapToIdeal(benchmark::State& state) {
   const FeatureSet& s = GetFeatures(static_cast<int>(state.range(0)), state.range(1));
-  const PixelUndistorter undistorter(PinholeCamera::TumFreiburg1());
+  PinholeCamera camera = PinholeCamera::TumFreiburg1();
+  if (state.range(2) != 0) {
+    camera.model = DistortionModel::kEquidistant;
+    camera.distortion = {0, 0, 0, 0, 0};
+  }
+  const PixelUndistorter undistorter(camera);
   std::vector<KeypointInfo> out;
   for (auto _ : state) {
     ToIdealKeypointInfos(s.kps_a, undistorter, &out);
@@ -176,7 +182,11 @@ BENCHMARK(BM_GuidedFr1Pinhole)
     ->Args({0, 1000})
     ->ArgNames({"sift", "n"})
     ->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_MapToIdeal)->Args({0, 1000})->ArgNames({"sift", "n"})->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_MapToIdeal)
+    ->Args({0, 1000, 0})
+    ->Args({0, 1000, 1})
+    ->ArgNames({"sift", "n", "equi"})
+    ->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_RefineGuided)
     ->Args({0, 1000})
     ->Args({1, 1000})
@@ -418,7 +428,14 @@ void PrintSummary(const CapturingReporter& rep) {
         "mapped to ideal pixels): %.1f us (%.2fx the same intrinsics without distortion)\n",
         gd, gd / g1);
   }
-  const double map = get("BM_MapToIdeal/sift:0/n:1000");
+  const double map = get("BM_MapToIdeal/sift:0/n:1000/equi:0");
+  const double map_equi = get("BM_MapToIdeal/sift:0/n:1000/equi:1");
+  if (map > 0 && map_equi > 0) {
+    std::printf(
+        "ORB 1000 keypoints mapped to ideal pixels: radial-tangential %.1f us (vectorised), "
+        "equidistant %.1f us (radial table, %.2fx)\n",
+        map, map_equi, map_equi / map);
+  }
   if (gd > 0 && g1 > 0 && map > 0) {
     std::printf(
         "ORB 1000 guided with distortion in a stream (each frame mapped once: %.1f - %.1f us): "
