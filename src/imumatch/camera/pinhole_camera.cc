@@ -19,6 +19,8 @@ const char* ToString(DistortionModel model) {
 
 namespace {
 
+constexpr double kPi = 3.14159265358979323846;
+
 // The equidistant (Kannala-Brandt) radius on the z=1 plane at ray angle theta, and its derivative.
 double KbRadius(const std::array<double, 5>& k, double theta, double* derivative) {
   const double t2 = theta * theta;
@@ -35,9 +37,8 @@ double KbRadius(const std::array<double, 5>& k, double theta, double* derivative
 // kept inside the bracket), or NaN when there is none below pi/2 (or the map is not increasing
 // on the way).
 double KbAngle(const std::array<double, 5>& k, double radius) {
-  constexpr double kHalfPi = 1.5707963267948966;
   if (!(radius >= 0.0)) return std::numeric_limits<double>::quiet_NaN();
-  double lo = 0.0, hi = kHalfPi;
+  double lo = 0.0, hi = 0.5 * kPi;
   if (!(KbRadius(k, hi, nullptr) > radius)) return std::numeric_limits<double>::quiet_NaN();
   double theta = std::min(radius, 0.5 * (lo + hi));
   for (int it = 0; it < 60; ++it) {
@@ -81,17 +82,16 @@ void PinholeCamera::Check() const {
       corner = std::max(corner, std::hypot((u - cx) / fx, (v - cy) / fy));
     }
   }
-  const double max_theta = kMaxEquidistantAngleDeg * 3.14159265358979323846 / 180.0;
+  const double max_theta = kMaxEquidistantAngleDeg * kPi / 180.0;
   // theta (1 + ...) must increase from 0 to the corner's angle (else two rays share an image
   // point): checked every 0.5 deg, and the corner must be reached before max_theta.
-  for (double theta = 0.0; theta <= max_theta; theta += 0.5 * 3.14159265358979323846 / 180.0) {
+  for (double theta = 0.0; theta <= max_theta; theta += 0.5 * kPi / 180.0) {
     double slope = 0.0;
     const double radius = KbRadius(distortion, theta, &slope);
     if (!(slope > 0.0)) {
       std::ostringstream m;
       m << "equidistant lens k=[" << distortion[0] << " " << distortion[1] << " " << distortion[2]
-        << " " << distortion[3] << "]: the image radius stops growing at "
-        << theta * 180.0 / 3.14159265358979323846
+        << " " << distortion[3] << "]: the image radius stops growing at " << theta * 180.0 / kPi
         << " deg from the optical axis, before the image corners (two rays would share a pixel)";
       throw InvalidArgument(m.str());
     }

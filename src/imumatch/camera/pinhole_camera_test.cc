@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "imumatch/camera/camera_test_util.h"
 #include "imumatch/core/error.h"
 
 namespace imumatch {
@@ -107,15 +108,10 @@ TEST(PinholeCamera, EquidistantMapsTheRayAngleToTheRadius) {
 
 // Pixel -> ray -> pixel over the whole image of a strong equidistant lens (corners near 60 deg).
 TEST(PinholeCamera, EquidistantRoundTrip) {
-  PinholeCamera cam;
-  cam.width = 752;
-  cam.height = 480;
-  cam.fx = cam.fy = 380.0;
-  cam.cx = 370.0;
-  cam.cy = 245.0;
-  cam.model = DistortionModel::kEquidistant;
-  cam.distortion = {-0.02, 0.01, -0.004, 0.0005, 0.0};
+  const PinholeCamera cam = testing::EquidistantTestCamera();
   cam.Check();
+  const double k1 = cam.distortion[0], k2 = cam.distortion[1], k3 = cam.distortion[2],
+               k4 = cam.distortion[3];
   double worst = 0.0;
   for (double v = -0.5; v <= 479.5; v += 23.9) {
     for (double u = -0.5; u <= 751.5; u += 18.7) {
@@ -127,8 +123,7 @@ TEST(PinholeCamera, EquidistantRoundTrip) {
       const double theta = std::atan(xy.norm());
       const double radius = std::hypot((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy);
       const double t2 = theta * theta;
-      EXPECT_NEAR(theta * (1 - 0.02 * t2 + 0.01 * t2 * t2 - 0.004 * t2 * t2 * t2 +
-                           0.0005 * t2 * t2 * t2 * t2),
+      EXPECT_NEAR(theta * (1 + k1 * t2 + k2 * t2 * t2 + k3 * t2 * t2 * t2 + k4 * t2 * t2 * t2 * t2),
                   radius, 1e-12);
     }
   }
@@ -141,13 +136,8 @@ TEST(PinholeCamera, EquidistantRoundTrip) {
 }
 
 TEST(PinholeCamera, EquidistantCheckRefusesWhatIdealPixelsCannotHold) {
-  PinholeCamera cam;
-  cam.width = 752;
-  cam.height = 480;
-  cam.fx = cam.fy = 380.0;
-  cam.cx = 370.0;
-  cam.cy = 245.0;
-  cam.model = DistortionModel::kEquidistant;
+  PinholeCamera cam = testing::EquidistantTestCamera();
+  cam.distortion = {0, 0, 0, 0, 0};
   EXPECT_NO_THROW(cam.Check());
   // A fisheye: corners sqrt(376^2 + 240^2) / 150 = 2.97 rad (170 deg) from the axis.
   PinholeCamera wide = cam;

@@ -7,26 +7,14 @@
 #include <gtest/gtest.h>
 #include <Eigen/LU>
 
+#include "imumatch/camera/camera_test_util.h"
+
 namespace imumatch {
 namespace {
 
-// An equidistant lens as strong as EuRoC's (corners near 60 deg from the axis).
-PinholeCamera EquidistantCamera() {
-  PinholeCamera cam;
-  cam.width = 752;
-  cam.height = 480;
-  cam.fx = 380.0;
-  cam.fy = 379.0;
-  cam.cx = 370.0;
-  cam.cy = 245.0;
-  cam.model = DistortionModel::kEquidistant;
-  cam.distortion = {-0.02, 0.01, -0.004, 0.0005, 0.0};
-  return cam;
-}
-
 TEST(PinholeCamera, DistortionJacobianMatchesFiniteDifferences) {
-  for (const PinholeCamera& cam :
-       {PinholeCamera::EurocCam0(), PinholeCamera::TumFreiburg1(), EquidistantCamera()}) {
+  for (const PinholeCamera& cam : {PinholeCamera::EurocCam0(), PinholeCamera::TumFreiburg1(),
+                                   testing::EquidistantTestCamera()}) {
     for (const Eigen::Vector2d& xy :
          {Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(0.6, -0.4), Eigen::Vector2d(-0.8, 0.5)}) {
       Eigen::Matrix2d j;
@@ -43,7 +31,7 @@ TEST(PinholeCamera, DistortionJacobianMatchesFiniteDifferences) {
 }
 
 TEST(PixelUndistorter, AgreesWithTheForwardModelEverywhereInTheImage) {
-  for (const PinholeCamera& cam : {PinholeCamera::EurocCam0(), EquidistantCamera()}) {
+  for (const PinholeCamera& cam : {PinholeCamera::EurocCam0(), testing::EquidistantTestCamera()}) {
     SCOPED_TRACE(ToString(cam.model));
     const PixelUndistorter undistorter(cam);
     EXPECT_FALSE(undistorter.identity());
@@ -86,8 +74,8 @@ TEST(PixelUndistorter, AgreesWithTheForwardModelEverywhereInTheImage) {
 TEST(PixelUndistorter, InPlaceBatchEqualsToIdealOnEveryPath) {
   using Path = PixelUndistorter::Path;
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  for (const PinholeCamera& cam :
-       {PinholeCamera::EurocCam0(), PinholeCamera::TumFreiburg1(), EquidistantCamera()}) {
+  for (const PinholeCamera& cam : {PinholeCamera::EurocCam0(), PinholeCamera::TumFreiburg1(),
+                                   testing::EquidistantTestCamera()}) {
     const PixelUndistorter undistorter(cam);
     // Points inside the image (a lattice that crosses the 64-point runs), a few outside the
     // table (beyond the image, the iterative inverse) and NaN.
