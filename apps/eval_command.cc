@@ -294,6 +294,7 @@ void RunEval(const std::string& path, CommonArgs a, double interval_s, int step,
     }
   }
   context.config.push_back({"dataset", path});
+  context.config.push_back({"camera", source.dataset.camera.ToString()});
   context.config.push_back({"pairs", interval_s > 0
                                          ? "interval " + std::to_string(interval_s) + " s"
                                          : "step " + std::to_string(step) + " frame(s)"});

@@ -86,6 +86,7 @@ void RunTrackCommand(const TrackArgs& a) {
   const std::string report = TrackReportMarkdown(
       result, o,
       {{"dataset", a.path},
+       {"camera", source.dataset.camera.ToString()},
        {"detector", a.detector + ", " + std::to_string(a.max_keypoints) + " keypoints"},
        {"matcher", std::string(a.hybrid ? "hybrid (IMU-seeded KLT + guided)" : "guided") +
                        (a.no_second_pass ? ", one pass" : ", two passes") +

@@ -272,7 +272,9 @@ std::string PinholeCamera::ToString() const {
   if (HasDistortion()) {
     if (model == DistortionModel::kEquidistant) out << " equidistant";
     out << " d=[" << distortion[0] << " " << distortion[1] << " " << distortion[2] << " "
-        << distortion[3] << " " << distortion[4] << "]";
+        << distortion[3];
+    if (model != DistortionModel::kEquidistant) out << " " << distortion[4];  // k1..k4 only
+    out << "]";
   }
   out << " depth_scale=" << depth_scale;
   return out.str();

@@ -177,7 +177,8 @@ TEST(PinholeCamera, ParsesTextIntrinsics) {
       ParseCameraFromText("equidistant 380 380 370 245 752 480 -0.02 0.01 -0.004 0.0005", "x");
   EXPECT_EQ(e.model, DistortionModel::kEquidistant);
   EXPECT_DOUBLE_EQ(e.distortion[3], 0.0005);
-  EXPECT_NE(e.ToString().find("equidistant"), std::string::npos);
+  EXPECT_NE(e.ToString().find("equidistant d=[-0.02 0.01 -0.004 0.0005]"), std::string::npos)
+      << e.ToString();
   // An equidistant lens needs its size and all four coefficients; a fifth is refused.
   EXPECT_THROW(ParseCameraFromText("equidistant 380 380 370 245", "x"), InputError);
   EXPECT_THROW(ParseCameraFromText("equidistant 380 380 370 245 752 480 0 0 0 0 0", "x"),
