@@ -153,17 +153,16 @@ K x the undistorted bearing: where the guided matcher predicts and searches.)")
       .def_property(
           "model", [](const PinholeCamera& c) { return std::string(ToString(c.model)); },
           [](PinholeCamera& c, const std::string& name) {
-            if (name == "radial-tangential" || name == "radtan") {
-              c.model = DistortionModel::kRadialTangential;
-            } else if (name == "equidistant") {
-              c.model = DistortionModel::kEquidistant;
-            } else {
-              throw InvalidArgument("model must be 'radial-tangential' or 'equidistant', not '" +
-                                    name + "'");
+            const std::optional<DistortionModel> model = DistortionModelFromName(name);
+            if (!model) {
+              throw InvalidArgument("model must be one of " + std::string(kDistortionModelNames) +
+                                    ", not '" + name + "'");
             }
+            c.model = *model;
           },
           "Lens model: 'radial-tangential' (default) or 'equidistant' (Kannala-Brandt, "
-          "Kalibr's 'equidistant').")
+          "Kalibr's 'equidistant'); set also by the aliases 'radtan', 'plumb_bob', 'equi', "
+          "'fisheye'.")
       .def_readwrite("depth_scale", &PinholeCamera::depth_scale,
                      "Raw depth units per metre (TUM: 5000).")
       .def("check", &PinholeCamera::Check, "Raises ValueError on invalid values.")

@@ -55,6 +55,11 @@ def test_equidistant_agrees_with_opencv_fisheye():
     assert np.abs(cam.distort(ideal) - uv).max() < 1e-6
     with pytest.raises(ValueError):
         cam.model = "omnidirectional"
+    # The calibration tools' aliases, as the C++ readers accept them.
+    cam.model = "plumb_bob"
+    assert cam.model == "radial-tangential"
+    cam.model = "fisheye"
+    assert cam.model == "equidistant"
 
 
 def test_rigid_compose_inverse_and_transform():

@@ -17,6 +17,16 @@ const char* ToString(DistortionModel model) {
   return model == DistortionModel::kEquidistant ? "equidistant" : "radial-tangential";
 }
 
+std::optional<DistortionModel> DistortionModelFromName(const std::string& name) {
+  if (name == "radial-tangential" || name == "radtan" || name == "plumb_bob") {
+    return DistortionModel::kRadialTangential;
+  }
+  if (name == "equidistant" || name == "equi" || name == "fisheye") {
+    return DistortionModel::kEquidistant;
+  }
+  return std::nullopt;
+}
+
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -295,11 +305,12 @@ PinholeCamera ParseCameraFromText(const std::string& text, const std::string& so
     DistortionModel model = DistortionModel::kRadialTangential;
     bool first = true;
     while (fields >> token) {
-      if (first && (token == "equidistant" || token == "radtan" || token == "radial-tangential")) {
-        model = token == "equidistant" ? DistortionModel::kEquidistant
-                                       : DistortionModel::kRadialTangential;
-        first = false;
-        continue;
+      if (first) {
+        if (const std::optional<DistortionModel> named = DistortionModelFromName(token)) {
+          model = *named;
+          first = false;
+          continue;
+        }
       }
       first = false;
       char* end = nullptr;

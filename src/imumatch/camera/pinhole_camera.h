@@ -38,6 +38,14 @@ struct RadTan {
 // k3 theta^6 + k4 theta^8) on the normalised image plane).
 enum class DistortionModel { kRadialTangential, kEquidistant };
 const char* ToString(DistortionModel model);
+// The model a name stands for, by the names calibration tools write: "radial-tangential",
+// "radtan" (Kalibr), "plumb_bob" (ROS / OpenCV); "equidistant", "equi" (Kalibr), "fisheye"
+// (OpenCV cv::fisheye). nullopt for any other name. Every reader of a lens model (EuRoC / Kalibr
+// sensor.yaml, text intrinsics, sequence.json, Python) accepts these and only these.
+std::optional<DistortionModel> DistortionModelFromName(const std::string& name);
+// For messages: the accepted names.
+constexpr const char* kDistortionModelNames =
+    "radial-tangential, radtan, plumb_bob, equidistant, equi, fisheye";
 
 // Pinhole camera with optional lens distortion and a depth scale for 16-bit depth images.
 //

@@ -183,6 +183,12 @@ TEST(PinholeCamera, ParsesTextIntrinsics) {
   EXPECT_THROW(ParseCameraFromText("equidistant 380 380 370 245", "x"), InputError);
   EXPECT_THROW(ParseCameraFromText("equidistant 380 380 370 245 752 480 0 0 0 0 0", "x"),
                InputError);
+  // The calibration tools' aliases name the same models (Kalibr "equi", OpenCV "fisheye").
+  EXPECT_EQ(
+      ParseCameraFromText("fisheye 380 380 370 245 752 480 -0.02 0.01 -0.004 0.0005", "x").model,
+      DistortionModel::kEquidistant);
+  EXPECT_EQ(ParseCameraFromText("plumb_bob 380 380 370 245 752 480 -0.2", "x").model,
+            DistortionModel::kRadialTangential);
   // A fisheye the matcher cannot hold: the error names the line.
   try {
     ParseCameraFromText("\nequidistant 150 150 370 245 752 480 0 0 0 0", "cam.txt");
@@ -205,6 +211,23 @@ TEST(PinholeCamera, TextErrorsNameFileAndLine) {
   EXPECT_THROW(ParseCameraFromText("-5 516 318 255", "x"), InputError);
   EXPECT_THROW(ParseCameraFromText("", "x"), InputError);
   EXPECT_THROW(ReadCameraFromText("/nonexistent/intrinsics.txt"), InputError);
+}
+
+TEST(PinholeCameraTest, DistortionModelNames) {
+  for (const char* name : {"radial-tangential", "radtan", "plumb_bob"}) {
+    EXPECT_EQ(DistortionModelFromName(name), DistortionModel::kRadialTangential) << name;
+  }
+  for (const char* name : {"equidistant", "equi", "fisheye"}) {
+    EXPECT_EQ(DistortionModelFromName(name), DistortionModel::kEquidistant) << name;
+  }
+  for (const char* name : {"", "Equidistant", "kb4", "radial", "pinhole"}) {
+    EXPECT_FALSE(DistortionModelFromName(name).has_value()) << name;
+  }
+  // ToString's names read back as their models.
+  for (const DistortionModel m :
+       {DistortionModel::kRadialTangential, DistortionModel::kEquidistant}) {
+    EXPECT_EQ(DistortionModelFromName(ToString(m)), m);
+  }
 }
 
 }  // namespace

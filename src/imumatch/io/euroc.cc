@@ -161,17 +161,14 @@ EurocCameraSensor ReadEurocCameraSensor(const std::string& path) {
   sensor.camera.width = static_cast<int>(size[0]);
   sensor.camera.height = static_cast<int>(size[1]);
   const std::string distortion_model = GetString(root, "distortion_model", path);
-  if (distortion_model == "radial-tangential" || distortion_model == "radtan" ||
-      distortion_model == "plumb_bob") {
-    sensor.camera.model = DistortionModel::kRadialTangential;
-  } else if (distortion_model == "equidistant" || distortion_model == "equi" ||
-             distortion_model == "fisheye") {
-    sensor.camera.model = DistortionModel::kEquidistant;
+  if (const std::optional<DistortionModel> lens = DistortionModelFromName(distortion_model)) {
+    sensor.camera.model = *lens;
   } else {
     throw InputError(path, LineOf(root["distortion_model"]),
                      "distortion_model '" + distortion_model +
                          "' is not supported (radial-tangential k1 k2 p1 p2 [k3], or equidistant "
-                         "k1 k2 k3 k4)");
+                         "k1 k2 k3 k4; names: " +
+                         kDistortionModelNames + ")");
   }
   const bool equidistant = sensor.camera.model == DistortionModel::kEquidistant;
   const std::vector<double> d =
