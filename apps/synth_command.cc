@@ -33,7 +33,29 @@ struct SynthArgs {
   double texel_m = 0.005;
   double gain = 1.0;
   bool overwrite = false;
+  std::string camera = "kinect";
+  CLI::Option* width_option = nullptr;
 };
+
+// The camera to render with: a named one or a text intrinsics file (ReadCameraFromText).
+PinholeCamera SynthCamera(const SynthArgs& a) {
+  if (a.camera == "kinect") {
+    // Kinect-like camera scaled to the requested width (4:3).
+    IMUMATCH_CHECK(a.width >= 16 && a.width <= 4096, "--width must be in [16, 4096]");
+    return PinholeCamera::KinectDefault().ScaledToWidth(a.width);
+  }
+  if (a.width_option != nullptr && a.width_option->count() > 0) {
+    throw InvalidArgument("--width applies to --camera kinect only; '" + a.camera +
+                          "' sets its own size");
+  }
+  if (a.camera == "euroc") return PinholeCamera::EurocCam0();
+  if (a.camera == "tum-fr1") return PinholeCamera::TumFreiburg1();
+  if (!std::filesystem::is_regular_file(a.camera)) {
+    throw InvalidArgument("--camera '" + a.camera +
+                          "': not kinect, euroc or tum-fr1, and no such file");
+  }
+  return ReadCameraFromText(a.camera);
+}
 
 void RunSynth(const SynthArgs& a) {
   // Fail fast, before rendering: unknown motion, or an output folder that is in use.
@@ -62,16 +84,14 @@ void RunSynth(const SynthArgs& a) {
     options.motion_options.still_after_s = a.still_s;
   }
   options.t0_ns = SecondsToNs(a.t0_s);
-  // Kinect-like camera scaled to the requested width (4:3).
-  IMUMATCH_CHECK(a.width >= 16 && a.width <= 4096, "--width must be in [16, 4096]");
-  options.camera = PinholeCamera::KinectDefault().ScaledToWidth(a.width);
+  options.camera = SynthCamera(a);
   SceneOptions scene_options;
   scene_options.texel_size_m = a.texel_m;
   options.Check();
 
-  std::cout << "rendering '" << a.motion << "' at " << a.fps << " fps, " << options.camera.width
-            << "x" << options.camera.height << ", IMU model " << a.imu << ", seed " << a.seed
-            << " ..." << std::endl;
+  std::cout << "rendering '" << a.motion << "' at " << a.fps << " fps, camera "
+            << options.camera.ToString() << ", IMU model " << a.imu << ", seed " << a.seed << " ..."
+            << std::endl;
   const Scene scene(scene_options);
   const SyntheticSequence sequence = MakeSyntheticSequence(options, scene);
   SyntheticWriteOptions write_options;
@@ -103,7 +123,16 @@ void AddSynthCommand(CLI::App& app) {
       ->capture_default_str();
   sub->add_flag("--depth-noise", args->depth_noise, "Add Kinect-like depth noise");
   sub->add_flag("--depth-holes", args->depth_holes, "Add depth holes (dropouts, range, grazing)");
-  sub->add_option("--width", args->width, "Image width in pixels (4:3, Kinect-like intrinsics)")
+  args->width_option =
+      sub->add_option("--width", args->width,
+                      "Image width in pixels of the kinect camera (4:3, Kinect-like intrinsics)")
+          ->capture_default_str();
+  sub->add_option("--camera", args->camera,
+                  "Camera to render with: kinect (pinhole, scaled to --width), euroc (EuRoC MAV "
+                  "cam0: 752x480, radial-tangential lens, k1 = -0.28), tum-fr1 (TUM fr1 "
+                  "calibration with its lens), or a text intrinsics file as camera.txt "
+                  "('[radtan|equidistant] fx fy cx cy width height k...'); the images are rendered "
+                  "through the lens, the depth and poses stay exact")
       ->capture_default_str();
   sub->add_option("--duration", args->duration_s, "Duration of the motion (s), default per motion");
   sub->add_option("--still", args->still_s, "Still time before and after the motion (s)");

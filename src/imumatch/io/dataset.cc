@@ -414,6 +414,16 @@ Dataset LoadSyntheticDataset(const std::string& root, const DatasetOptions& opti
   c.fy = NeedDouble(cam, "fy", json_path);
   c.cx = NeedDouble(cam, "cx", json_path);
   c.cy = NeedDouble(cam, "cy", json_path);
+  // "distortion_model" since 2026-12-06; sequences written before have radial-tangential lenses.
+  if (const auto it = cam.find("distortion_model"); it != cam.end()) {
+    const std::optional<DistortionModel> model =
+        it->is_string() ? DistortionModelFromName(it->get<std::string>()) : std::nullopt;
+    if (!model) {
+      throw InputError(json_path, std::string("camera.distortion_model must be one of ") +
+                                      kDistortionModelNames);
+    }
+    c.model = *model;
+  }
   const std::vector<double> dist = NeedDoubles(cam, "distortion", 5, json_path);
   std::copy(dist.begin(), dist.end(), c.distortion.begin());
   c.depth_scale = NeedDouble(cam, "depth_scale", json_path);

@@ -77,10 +77,16 @@ void WriteSequence(const SyntheticSequence& seq, const SyntheticSequenceOptions*
   WriteImuText((dir / "imu.txt").string(), seq.imu, "simulated IMU (imumatch synth)");
 
   const PinholeCamera& c = seq.camera;
-  std::string camera_txt = "# fx fy cx cy width height k1 k2 p1 p2 k3\n";
+  // ReadCameraFromText's line: an equidistant lens is named and has k1..k4.
+  const bool equidistant = c.model == DistortionModel::kEquidistant;
+  std::string camera_txt = equidistant ? "# equidistant fx fy cx cy width height k1 k2 k3 k4\n"
+                                       : "# fx fy cx cy width height k1 k2 p1 p2 k3\n";
+  if (equidistant) camera_txt += "equidistant ";
   for (double v : {c.fx, c.fy, c.cx, c.cy}) camera_txt += FormatDoubleExact(v) + " ";
   camera_txt += std::to_string(c.width) + " " + std::to_string(c.height);
-  for (double d : c.distortion) camera_txt += " " + FormatDoubleExact(d);
+  for (size_t i = 0; i < (equidistant ? 4u : c.distortion.size()); ++i) {
+    camera_txt += " " + FormatDoubleExact(c.distortion[i]);
+  }
   WriteText(dir / "camera.txt", camera_txt + "\n");
 
   Json j;
@@ -112,6 +118,7 @@ void WriteSequence(const SyntheticSequence& seq, const SyntheticSequenceOptions*
                  {"fy", c.fy},
                  {"cx", c.cx},
                  {"cy", c.cy},
+                 {"distortion_model", ToString(c.model)},
                  {"distortion", c.distortion},
                  {"depth_scale", c.depth_scale}};
   if (generated_with != nullptr) {

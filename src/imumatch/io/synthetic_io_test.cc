@@ -1,5 +1,6 @@
 #include "imumatch/io/synthetic_io.h"
 
+#include <array>
 #include <filesystem>
 
 #include <gtest/gtest.h>
@@ -111,6 +112,28 @@ TEST(SyntheticIo, WriteThenLoadRoundTripsExactly) {
   EXPECT_EQ(ReadCameraFromText(root + "/camera.txt").fx, seq.camera.fx);
 }
 
+// A lens survives the round trip: camera.txt names an equidistant lens and gives its k1..k4,
+// a radial-tangential one its five coefficients; sequence.json states the model.
+TEST(SyntheticIo, TheLensRoundTrips) {
+  for (const DistortionModel model :
+       {DistortionModel::kRadialTangential, DistortionModel::kEquidistant}) {
+    SyntheticSequence seq = SmallSequence().sequence;
+    seq.camera.model = model;
+    seq.camera.distortion = model == DistortionModel::kEquidistant
+                                ? std::array<double, 5>{-0.02, 0.01, -0.004, 0.0005, 0.0}
+                                : std::array<double, 5>{-0.28, 0.07, 2e-4, -3e-5, 0.01};
+    TempDir dir;
+    const std::string root = dir.Path("lens");
+    WriteSyntheticSequence(seq, SmallSequence().options, root);
+    const Dataset d = LoadDataset(root);
+    EXPECT_EQ(d.camera.model, model);
+    EXPECT_EQ(d.camera.distortion, seq.camera.distortion) << ToString(model);
+    EXPECT_EQ(d.camera.fx, seq.camera.fx);
+    const nlohmann::json j = nlohmann::json::parse(ReadFileToString(root + "/sequence.json"));
+    EXPECT_EQ(j.at("camera").at("distortion_model"), ToString(model));
+  }
+}
+
 TEST(SyntheticIo, RefusesNonEmptyFolderUnlessOverwrite) {
   const Small& small = SmallSequence();
   TempDir dir;
@@ -137,6 +160,12 @@ TEST(SyntheticIo, MalformedSequenceJson) {
   ExpectInputError([&] { LoadDataset(root); }, json, 0, "not an imumatch synthetic sequence");
   dir.Write("seq/sequence.json", "{\"generator\": \"imumatch synth\"}\n");
   ExpectInputError([&] { LoadDataset(root); }, json, 0, "missing key 'camera'");
+  // A lens model by an unknown name.
+  WriteSyntheticSequence(small.sequence, small.options, root, {/*overwrite=*/true});
+  nlohmann::json j = nlohmann::json::parse(ReadFileToString(json));
+  j["camera"]["distortion_model"] = "kb8";
+  dir.Write("seq/sequence.json", j.dump(2));
+  ExpectInputError([&] { LoadDataset(root); }, json, 0, "camera.distortion_model must be one of");
 }
 
 TEST(SyntheticIo, CorruptImuFileNamesLine) {

@@ -23,10 +23,13 @@ void BM_SceneConstruction(benchmark::State& state) {
 }
 BENCHMARK(BM_SceneConstruction)->Unit(benchmark::kMillisecond)->Iterations(2);
 
-// Arguments: threads, texture filtering (0/1), edge supersampling.
+// Arguments: threads, texture filtering (0/1), edge supersampling, lens (0: the Kinect-like
+// pinhole camera; 1: the TUM fr1 calibration with its lens; 2: the same without the lens).
 void BM_RenderView(benchmark::State& state) {
   const Scene& scene = SharedScene();
-  const PinholeCamera camera = PinholeCamera::KinectDefault();
+  PinholeCamera camera = PinholeCamera::KinectDefault();
+  if (state.range(3) != 0) camera = PinholeCamera::TumFreiburg1();
+  if (state.range(3) == 2) camera.distortion = {0, 0, 0, 0, 0};
   const auto motion = MakeMotion("walk", MotionOptions());
   RenderOptions options;
   options.num_threads = static_cast<int>(state.range(0));
@@ -44,10 +47,12 @@ void BM_RenderView(benchmark::State& state) {
                                                   benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_RenderView)
-    ->Args({1, 0, 1})  // baseline: 1 thread, no prefiltering, no edge supersampling
-    ->Args({1, 1, 1})
-    ->Args({1, 1, 3})
-    ->Args({2, 1, 3})  // the default
+    ->Args({1, 0, 1, 0})  // baseline: 1 thread, no prefiltering, no edge supersampling
+    ->Args({1, 1, 1, 0})
+    ->Args({1, 1, 3, 0})
+    ->Args({2, 1, 3, 0})  // the default
+    ->Args({2, 1, 3, 1})  // through the TUM fr1 lens
+    ->Args({2, 1, 3, 2})  // the same intrinsics without it
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -7,6 +7,7 @@
 #include <thread>
 #include <vector>
 
+#include "imumatch/camera/pixel_undistorter.h"
 #include "imumatch/core/error.h"
 #include "imumatch/sim/seed_mix.h"
 
@@ -82,9 +83,12 @@ class FrameCaster {
     double cos_incidence = 0.0;
   };
 
-  // Casts the ray through continuous pixel (u, v); writes BGR into colour when non-null.
-  // footprint_scale: pixel size in pixels (1 for a full pixel, 1/n for sub-samples).
-  Hit Cast(double u, double v, double footprint_scale, float* colour) const {
+  // Casts the ray through the ideal pixel (u, v) (K times the ray's normalised coordinates: the
+  // image pixel itself for a camera without distortion); writes BGR into colour when non-null.
+  // step_u / step_v: the ideal-pixel offsets of one step of the footprint along the image's u and
+  // v (one pixel, or 1/n for sub-samples; through a lens, its Jacobian's columns).
+  Hit Cast(double u, double v, const Eigen::Vector2d& step_u, const Eigen::Vector2d& step_v,
+           float* colour) const {
     const Eigen::Vector3d d_cam((u - camera_.cx) / camera_.fx, (v - camera_.cy) / camera_.fy, 1.0);
     double best = std::numeric_limits<double>::infinity();
     int best_surface = -1, best_box = -1;
@@ -127,8 +131,10 @@ class FrameCaster {
     // Derivatives of the surface point with respect to the pixel coordinates (exact for the plane):
     // dP/du = t (e_u - d (n.e_u)/(n.d)), in texels.
     const Eigen::Matrix3d& m = box_r_cam_[best_box];
-    const Eigen::Vector3d e_u = m.col(0) * (footprint_scale / camera_.fx);
-    const Eigen::Vector3d e_v = m.col(1) * (footprint_scale / camera_.fy);
+    const Eigen::Vector3d e_u =
+        m.col(0) * (step_u.x() / camera_.fx) + m.col(1) * (step_u.y() / camera_.fy);
+    const Eigen::Vector3d e_v =
+        m.col(0) * (step_v.x() / camera_.fx) + m.col(1) * (step_v.y() / camera_.fy);
     const Eigen::Vector3d dp_du = best * (e_u - best_d * (e_u[axis] / best_d[axis])) * inv_texel_;
     const Eigen::Vector3d dp_dv = best * (e_v - best_d * (e_v[axis] / best_d[axis])) * inv_texel_;
     const Eigen::Vector2d gu(dp_du[ia], dp_du[ib]), gv(dp_dv[ia], dp_dv[ib]);
@@ -217,7 +223,6 @@ RenderedView RenderView(const Scene& scene, const PinholeCamera& camera,
                         const Rigid3d& world_from_cam, const RenderOptions& options) {
   camera.Check();
   options.Check();
-  IMUMATCH_CHECK(!camera.HasDistortion(), "RenderView renders pinhole cameras without distortion");
   IMUMATCH_CHECK(
       world_from_cam.rotation.coeffs().allFinite() && world_from_cam.translation.allFinite(),
       "RenderView: world_from_cam must be finite");
@@ -229,6 +234,38 @@ RenderedView RenderView(const Scene& scene, const PinholeCamera& camera,
   cv::Mat surface_ids(height, width, CV_32S);
   const DepthNoiseOptions& noise = options.depth_noise;
 
+  // Through a lens, every pixel centre's ideal pixel (PixelUndistorter: the lens model inverted
+  // to float rounding) and the ideal-pixel steps to its right and lower neighbours (the lens's
+  // Jacobian, for the texture filter's footprint and the edge sub-samples).
+  const bool distorted = camera.HasDistortion();
+  std::vector<float> ideal;
+  if (distorted) {
+    ideal.resize(static_cast<size_t>(width) * height * 2);
+    for (int v = 0; v < height; ++v) {
+      for (int u = 0; u < width; ++u) {
+        const size_t i = (static_cast<size_t>(v) * width + u) * 2;
+        ideal[i] = static_cast<float>(u);
+        ideal[i + 1] = static_cast<float>(v);
+      }
+    }
+    PixelUndistorter(camera).ToIdealInPlace(ideal.data(), width * height, 2);
+  }
+  struct PixelRay {
+    double u, v;
+    Eigen::Vector2d step_u, step_v;
+  };
+  const auto ray_of = [&](int u, int v) {
+    if (!distorted) return PixelRay{double(u), double(v), {1.0, 0.0}, {0.0, 1.0}};
+    const auto at = [&](int uu, int vv) {
+      const size_t i = (static_cast<size_t>(vv) * width + uu) * 2;
+      return Eigen::Vector2d(ideal[i], ideal[i + 1]);
+    };
+    const Eigen::Vector2d p = at(u, v);
+    const Eigen::Vector2d step_u = u + 1 < width ? at(u + 1, v) - p : p - at(u - 1, v);
+    const Eigen::Vector2d step_v = v + 1 < height ? at(u, v + 1) - p : p - at(u, v - 1);
+    return PixelRay{p.x(), p.y(), step_u, step_v};
+  };
+
   ParallelRows(height, options.num_threads, [&](int v) {
     cv::Vec3b* rgb = view.rgb.ptr<cv::Vec3b>(v);
     uint16_t* depth = view.depth.ptr<uint16_t>(v);
@@ -238,7 +275,8 @@ RenderedView RenderView(const Scene& scene, const PinholeCamera& camera,
     std::uniform_real_distribution<double> uniform(0.0, 1.0);
     for (int u = 0; u < width; ++u) {
       float colour[3];
-      const FrameCaster::Hit hit = caster.Cast(u, v, 1.0, colour);
+      const PixelRay ray = ray_of(u, v);
+      const FrameCaster::Hit hit = caster.Cast(ray.u, ray.v, ray.step_u, ray.step_v, colour);
       rgb[u] = ToPixel(colour);
       ids[u] = hit.surface;
       double z = hit.surface >= 0 ? hit.depth : 0.0;
@@ -270,10 +308,14 @@ RenderedView RenderView(const Scene& scene, const PinholeCamera& camera,
                           (u + 1 < width && ids[u + 1] != id);
         if (!edge) continue;
         float sum[3] = {0.0f, 0.0f, 0.0f};
+        const PixelRay ray = ray_of(u, v);
+        const Eigen::Vector2d sub_u = ray.step_u / n, sub_v = ray.step_v / n;
         for (int j = 0; j < n; ++j) {
           for (int i = 0; i < n; ++i) {
             float c[3];
-            caster.Cast(u + (i + 0.5) / n - 0.5, v + (j + 0.5) / n - 0.5, 1.0 / n, c);
+            const double a = (i + 0.5) / n - 0.5, b = (j + 0.5) / n - 0.5;
+            caster.Cast(ray.u + a * ray.step_u.x() + b * ray.step_v.x(),
+                        ray.v + a * ray.step_u.y() + b * ray.step_v.y(), sub_u, sub_v, c);
             for (int k = 0; k < 3; ++k) sum[k] += c[k];
           }
         }

@@ -46,8 +46,10 @@ struct RenderedView {
   cv::Mat depth;  // CV_16U, raw = round(z * camera.depth_scale), z along the optical axis; 0 = none
 };
 
-// Ray-casts the scene for a pinhole camera (no distortion: throws InvalidArgument otherwise) at
-// world_from_cam. Pixel (u, v) is rendered along the ray through its centre (OpenCV convention).
+// Ray-casts the scene for the camera at world_from_cam. Pixel (u, v) is rendered along the ray
+// through its centre (OpenCV convention), through the camera's lens when it has one (either
+// distortion model: the ray of PinholeCamera::PixelToNormalized, to float rounding of the ideal
+// pixel), so the depth image and the poses stay exact ground truth for a distorted image.
 RenderedView RenderView(const Scene& scene, const PinholeCamera& camera,
                         const Rigid3d& world_from_cam,
                         const RenderOptions& options = RenderOptions());

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
+#include "imumatch/camera/camera_test_util.h"
 #include "imumatch/core/error.h"
 #include "imumatch/core/so3.h"
 #include "imumatch/sim/motions.h"
@@ -119,9 +120,8 @@ TEST(RendererTest, RenderedDepthMatchesAnalyticRayCastAtRandomPixels) {
 // Corners detected independently in two frames of a moving camera: the exact motion maps the
 // corners of frame A onto corners of frame B to sub-pixel accuracy (this also checks the
 // anti-aliasing: aliased textures make corners jump between frames).
-TEST(RendererTest, FeaturesMoveWithTheTruePose) {
+void ExpectFeaturesMoveWithTheTruePose(const PinholeCamera& camera) {
   const Scene& scene = FurnishedScene();
-  const PinholeCamera camera = PinholeCamera::KinectDefault();
   const auto motion = MakeMotion("walk", MotionOptions());
   const Rigid3d body_from_cam = SyntheticCamFromImu().Inverse();
   const Rigid3d world_from_a = motion->WorldFromBody(1.2) * body_from_cam;
@@ -171,12 +171,75 @@ TEST(RendererTest, FeaturesMoveWithTheTruePose) {
   ASSERT_GT(tested, 200);
   const double frac_half = static_cast<double>(within_half) / tested;
   const double frac_one = static_cast<double>(within_one) / tested;
-  RecordProperty("fraction_within_0_5px", std::to_string(frac_half));
-  RecordProperty("fraction_within_1px", std::to_string(frac_one));
+  ::testing::Test::RecordProperty("fraction_within_0_5px", std::to_string(frac_half));
+  ::testing::Test::RecordProperty("fraction_within_1px", std::to_string(frac_one));
   std::printf("corners tested %d: within 0.5 px %.3f, within 1 px %.3f\n", tested, frac_half,
               frac_one);
   EXPECT_GT(frac_one, 0.85);
   EXPECT_GT(frac_half, 0.75);
+}
+
+TEST(RendererTest, FeaturesMoveWithTheTruePose) {
+  ExpectFeaturesMoveWithTheTruePose(PinholeCamera::KinectDefault());
+}
+
+// Through a lens the image is distorted and the ground truth stays exact: corners found in the
+// rendered (distorted) images still move as the camera model projects the true motion.
+TEST(RendererTest, FeaturesMoveWithTheTruePoseThroughEurocsLens) {
+  ExpectFeaturesMoveWithTheTruePose(PinholeCamera::EurocCam0());
+}
+
+TEST(RendererTest, FeaturesMoveWithTheTruePoseThroughAnEquidistantLens) {
+  ExpectFeaturesMoveWithTheTruePose(testing::EquidistantTestCamera());
+}
+
+// Through a lens, pixel (u, v) shows the scene along the ray the camera model gives it: its depth
+// equals the analytic ray cast along PixelToNormalized(u, v) (the model's own inverse, in double,
+// and the scene's exact ray-box intersection, not the raster code) at every other pixel of the
+// image, and the lens matters: along the straight pinhole ray the depth differs in much of it.
+TEST(RendererTest, DepthThroughALensFollowsTheLensRay) {
+  SceneOptions scene_options;
+  scene_options.texel_size_m = 0.02;  // coarse textures: only depth matters here
+  const Scene scene(scene_options);
+  for (const PinholeCamera& camera :
+       {PinholeCamera::EurocCam0(), testing::EquidistantTestCamera()}) {
+    PinholeCamera straight = camera;
+    straight.model = DistortionModel::kRadialTangential;
+    straight.distortion = {0, 0, 0, 0, 0};
+    const Rigid3d world_from_cam = WorldFromCam(Eigen::Vector3d(-1.0, 0.3, 1.3), 20.0, 3.0);
+    RenderOptions options;
+    options.num_threads = 1;
+    const RenderedView view = RenderView(scene, camera, world_from_cam, options);
+    ASSERT_EQ(view.depth.size(), cv::Size(camera.width, camera.height));
+    int exact = 0, off_by_one = 0, wrong = 0, bent = 0, checked = 0;
+    for (int v = 0; v < camera.height; v += 2) {
+      for (int u = 0; u < camera.width; u += 2) {
+        const Eigen::Vector2d uv(u, v);
+        const double z = AnalyticDepth(scene, camera, world_from_cam, uv);
+        ASSERT_TRUE(std::isfinite(z));  // inside a closed room every ray hits something
+        const int expected = static_cast<int>(std::lround(z * camera.depth_scale));
+        const int raw = view.depth.at<uint16_t>(v, u);
+        const double z_straight = AnalyticDepth(scene, straight, world_from_cam, uv);
+        if (std::abs(z_straight - z) * camera.depth_scale > 10.0) ++bent;
+        ++checked;
+        if (raw == expected) {
+          ++exact;
+        } else if (std::abs(raw - expected) == 1) {
+          ++off_by_one;  // rounding ties (and the ideal pixel's float rounding) only
+        } else {
+          ++wrong;
+        }
+      }
+    }
+    // A pixel whose ray grazes an edge between two surfaces may land on either side of it with
+    // the ideal pixel's float rounding: a handful at most.
+    EXPECT_LE(wrong, checked / 5000) << camera.ToString();
+    EXPECT_LE(off_by_one, checked / 1000) << camera.ToString();
+    EXPECT_GT(bent, checked / 4) << camera.ToString();  // the lens matters in much of the image
+    std::printf(
+        "%s: %d pixels, %d exact, %d off by one, %d other; %d differ along the straight ray\n",
+        ToString(camera.model), checked, exact, off_by_one, wrong, bent);
+  }
 }
 
 TEST(RendererTest, DeterministicForAFixedSeed) {
@@ -285,13 +348,13 @@ TEST(RendererTest, KinectDepthNoiseAndHoles) {
 }
 
 TEST(RendererTest, RejectsBadInput) {
-  PinholeCamera distorted = PinholeCamera::KinectDefault();
-  distorted.distortion[0] = 0.1;
+  PinholeCamera bad_camera = PinholeCamera::KinectDefault();
+  bad_camera.fx = 0.0;
   SceneOptions small;
   small.texel_size_m = 0.05;
   small.furniture = false;
   const Scene scene(small);
-  EXPECT_THROW(RenderView(scene, distorted, Rigid3d()), InvalidArgument);
+  EXPECT_THROW(RenderView(scene, bad_camera, Rigid3d()), InvalidArgument);
   RenderOptions bad;
   bad.num_threads = 0;
   EXPECT_THROW(RenderView(scene, PinholeCamera::KinectDefault(), Rigid3d(), bad), InvalidArgument);

@@ -21,8 +21,6 @@ void SyntheticSequenceOptions::Check() const {
         "SyntheticSequenceOptions.frame_times_s must be strictly increasing (index " << i << ")");
   }
   camera.Check();
-  IMUMATCH_CHECK(!camera.HasDistortion(),
-                 "SyntheticSequenceOptions.camera must have no distortion");
   IMUMATCH_CHECK(cam_from_imu.rotation.coeffs().allFinite() && cam_from_imu.translation.allFinite(),
                  "SyntheticSequenceOptions.cam_from_imu must be finite");
   IMUMATCH_CHECK(imu_initial_bias.gyro.allFinite() && imu_initial_bias.accel.allFinite(),

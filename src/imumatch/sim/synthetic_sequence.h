@@ -31,7 +31,7 @@ struct SyntheticSequenceOptions {
   // {motion_options.MotionStartTime(), motion_options.MotionEndTime()} for a seed pair.
   double frame_rate_hz = 30.0;
   std::vector<double> frame_times_s;
-  PinholeCamera camera = PinholeCamera::KinectDefault();  // must have no distortion
+  PinholeCamera camera = PinholeCamera::KinectDefault();  // either lens model
   Rigid3d cam_from_imu = SyntheticCamFromImu();
   std::string imu_model = "euroc";  // ImuParams::FromName: "euroc", "mems", "ideal"
   uint64_t imu_seed = 42;

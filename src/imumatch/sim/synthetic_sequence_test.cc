@@ -163,7 +163,7 @@ TEST(SyntheticSequenceTest, RejectsBadOptions) {
   options.camera = SmallCamera(32);
   EXPECT_THROW(MakeSyntheticSequence(options, CoarseScene()), InvalidArgument);
   options = SyntheticSequenceOptions();
-  options.camera.distortion[0] = 0.1;
+  options.camera.fy = -1.0;
   EXPECT_THROW(options.Check(), InvalidArgument);
   options = SyntheticSequenceOptions();
   options.frame_rate_hz = 0.0;
