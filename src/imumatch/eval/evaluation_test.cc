@@ -334,7 +334,7 @@ TEST(EvaluationTest, TheSecondPassFitsTheMotionAndFindsMoreCorrectMatches) {
   EXPECT_LT(g.refit_rotation_error_deg, 0.23);
   // The report's squared Mahalanobis distance of the exact truth from the fit (6 dof, under the
   // fit's covariance), recomputed here from the sequence's poses. (It is 76 on this pair: the fit
-  // is overconfident over a 30 deg turn with depth, a known limit; README, MH_05 item 16.)
+  // is overconfident over a 30 deg turn with depth, a known limit; docs/REAL_FLIGHT.md, item 16.)
   const Rigid3d truth = seq.frames[1].world_from_cam.Inverse() * seq.frames[0].world_from_cam;
   EXPECT_NEAR(g.refit_truth_mahalanobis2, SquaredMahalanobis(g.refit.motion, truth),
               1e-6 * g.refit_truth_mahalanobis2);
