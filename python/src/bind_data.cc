@@ -261,7 +261,8 @@ IMU (TUM) get one simulated from a spline through the ground truth (imu_model: '
 
   py::class_<SyntheticSequence>(m, "SyntheticSequence", "Frames, IMU and exact ground truth.")
       .def_readonly("motion", &SyntheticSequence::motion, "Motion name.")
-      .def_readonly("camera", &SyntheticSequence::camera, "PinholeCamera (no distortion).")
+      .def_readonly("camera", &SyntheticSequence::camera,
+                    "PinholeCamera the frames were rendered with (its lens too).")
       .def_readonly("frames", &SyntheticSequence::frames, "List of SyntheticFrame.")
       .def_property_readonly(
           "imu",
@@ -282,8 +283,10 @@ IMU (TUM) get one simulated from a spline through the ground truth (imu_model: '
   m.def(
       "make_synthetic_sequence",
       [](const std::string& motion, const std::vector<double>& frame_times_s, double frame_rate_hz,
-         const std::string& imu_model, uint64_t imu_seed, int render_threads) {
+         const std::string& imu_model, uint64_t imu_seed, int render_threads,
+         const std::optional<PinholeCamera>& camera) {
         SyntheticSequenceOptions o;
+        if (camera) o.camera = *camera;
         o.motion = motion;
         o.frame_times_s = frame_times_s;
         o.frame_rate_hz = frame_rate_hz;
@@ -296,10 +299,12 @@ IMU (TUM) get one simulated from a spline through the ground truth (imu_model: '
       },
       py::arg("motion") = "front1m", py::arg("frame_times_s") = std::vector<double>{},
       py::arg("frame_rate_hz") = 30.0, py::arg("imu_model") = "euroc", py::arg("imu_seed") = 42,
-      py::arg("render_threads") = 2,
+      py::arg("render_threads") = 2, py::arg("camera") = py::none(),
       R"(Renders a synthetic room seen along one of motion_names() (0.5 s still, 2 s motion, 0.5 s
 still) at frame_times_s (seconds; default: every 1/frame_rate_hz), with a simulated IMU. Ground
-truth is exact. Rendering costs ~0.1 s per 640 x 480 frame.)");
+truth is exact. camera: a PinholeCamera (default: Kinect-like 640 x 480 without a lens); with a
+lens (either model) each pixel is rendered along the ray the lens gives it, and depth and poses
+stay exact. Rendering costs ~0.1 s per 640 x 480 frame.)");
 
   // ---------------------------------------------------------------------------------- eval
   m.def(
