@@ -17,6 +17,12 @@ void AddEvalCommand(CLI::App& app);   // eval_command.cc
 void AddDemoCommand(CLI::App& app);   // eval_command.cc
 void AddTrackCommand(CLI::App& app);  // track_command.cc
 
+// --camera FILE of eval and track: the dataset's intrinsics and lens replaced (ReadCameraFile).
+inline constexpr const char* kCameraOptionHelp =
+    "replace the dataset's intrinsics and lens: a Kalibr/EuRoC camera sensor.yaml (*.yaml; its "
+    "extrinsics are not used) or a text line as camera.txt ('[radtan|equidistant] fx fy cx cy "
+    "width height k...'); the images must have its size";
+
 // --threads N (0 = all cores): OpenCV's worker threads (feature extraction, image decoding) via
 // cv::setNumThreads; returns the count used. eval_command.cc.
 int ApplyThreads(int threads);

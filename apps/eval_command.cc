@@ -246,7 +246,8 @@ void PrepareOut(const CommonArgs& a) {
   if (!check.note.empty()) std::cerr << "imumatch: note: " << check.note << "\n";
 }
 
-void RunEval(const std::string& path, CommonArgs a, double interval_s, int step, size_t max_pairs) {
+void RunEval(const std::string& path, const std::string& camera_file, CommonArgs a,
+             double interval_s, int step, size_t max_pairs) {
   EvaluationOptions o = MakeOptions(a);
   PrepareOut(a);
   const std::optional<double> threshold =
@@ -256,6 +257,7 @@ void RunEval(const std::string& path, CommonArgs a, double interval_s, int step,
   DatasetOptions dopts;
   dopts.imu_model = a.imu_model;
   dopts.imu_seed = a.seed;
+  if (!camera_file.empty()) dopts.camera = ReadCameraFile(camera_file);
   source = MakeDiskSource(LoadDatasetOrPosePair(path, dopts));
 
   if (o.motion_source == MotionSource::kImu && source.dataset.imu.empty()) {
@@ -423,6 +425,7 @@ void AddEvalCommand(CLI::App& app) {
       "its ground truth (TUM RGB-D, EuRoC, synthetic folder or a two-frame pose pair)");
   struct Args {
     std::string path;
+    std::string camera;
     CommonArgs common;
     double interval = 0.0;
     int step = 1;
@@ -443,9 +446,11 @@ void AddEvalCommand(CLI::App& app) {
   cmd->add_option("--max-pairs", args->max_pairs, "stop after N pairs (0 = all)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--camera", args->camera, kCameraOptionHelp);
   AddCommonOptions(cmd, args->common);
-  cmd->callback(
-      [args] { RunEval(args->path, args->common, args->interval, args->step, args->max_pairs); });
+  cmd->callback([args] {
+    RunEval(args->path, args->camera, args->common, args->interval, args->step, args->max_pairs);
+  });
 }
 
 void AddDemoCommand(CLI::App& app) {

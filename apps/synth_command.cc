@@ -10,6 +10,7 @@
 #include "commands.h"
 #include "imumatch/core/error.h"
 #include "imumatch/core/time.h"
+#include "imumatch/io/dataset.h"
 #include "imumatch/io/output_files.h"
 #include "imumatch/io/synthetic_io.h"
 #include "imumatch/sim/motions.h"
@@ -54,7 +55,7 @@ PinholeCamera SynthCamera(const SynthArgs& a) {
     throw InvalidArgument("--camera '" + a.camera +
                           "': not kinect, euroc or tum-fr1, and no such file");
   }
-  return ReadCameraFromText(a.camera);
+  return ReadCameraFile(a.camera);
 }
 
 void RunSynth(const SynthArgs& a) {
@@ -130,9 +131,10 @@ void AddSynthCommand(CLI::App& app) {
   sub->add_option("--camera", args->camera,
                   "Camera to render with: kinect (pinhole, scaled to --width), euroc (EuRoC MAV "
                   "cam0: 752x480, radial-tangential lens, k1 = -0.28), tum-fr1 (TUM fr1 "
-                  "calibration with its lens), or a text intrinsics file as camera.txt "
-                  "('[radtan|equidistant] fx fy cx cy width height k...'); the images are rendered "
-                  "through the lens, the depth and poses stay exact")
+                  "calibration with its lens), or a camera file: a Kalibr/EuRoC camera sensor.yaml "
+                  "or a text line as camera.txt ('[radtan|equidistant] fx fy cx cy width height "
+                  "k...'); the images are rendered through the lens, the depth and poses stay "
+                  "exact")
       ->capture_default_str();
   sub->add_option("--duration", args->duration_s, "Duration of the motion (s), default per motion");
   sub->add_option("--still", args->still_s, "Still time before and after the motion (s)");

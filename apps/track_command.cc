@@ -39,6 +39,7 @@ struct TrackArgs {
   bool progress = false;
   std::string imu_model = "euroc";
   uint64_t seed = 42;
+  std::string camera;
 };
 
 void RunTrackCommand(const TrackArgs& a) {
@@ -75,6 +76,7 @@ void RunTrackCommand(const TrackArgs& a) {
   dopts.imu_seed = a.seed;
   // A missing image is a bad frame: skipped with its name when it is read, the run goes on.
   dopts.check_files_exist = false;
+  if (!a.camera.empty()) dopts.camera = ReadCameraFile(a.camera);
   const EvalSource source = MakeDiskSource(LoadDataset(a.path, dopts));
   std::cerr << "imumatch track: " << source.dataset.name << " (" << source.dataset.frames.size()
             << " frames); IMU: " << source.dataset.imu_source_note << "\n";
@@ -136,6 +138,7 @@ void AddTrackCommand(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::Range(0.0, 3600.0));
   cmd->add_option("--first", a->first, "first frame")->capture_default_str();
+  cmd->add_option("--camera", a->camera, kCameraOptionHelp);
   cmd->add_option("--max-frames", a->max_frames, "frames to run (0 = all)")->capture_default_str();
   cmd->add_option("--images", a->images, "match images of the first N judged frames")
       ->capture_default_str()

@@ -1,6 +1,7 @@
 #include "imumatch/io/dataset.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -221,6 +222,14 @@ void DatasetOptions::Check() const {
                                    << kMaxSimulatedImuSpanNs << ")");
   spline.Check();
   imu_buffer.Check();
+}
+
+PinholeCamera ReadCameraFile(const std::string& path) {
+  std::string extension = fs::path(path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (extension == ".yaml" || extension == ".yml") return ReadEurocCameraSensor(path).camera;
+  return ReadCameraFromText(path);
 }
 
 PinholeCamera TumCameraForFolderName(const std::string& folder_name) {

@@ -407,6 +407,27 @@ TEST(Dataset, TumCameraFromCameraTxtOrOptions) {
   EXPECT_DOUBLE_EQ(TumCameraForFolderName("rgbd_dataset_freiburg2_desk").cy, 249.7);
 }
 
+// A camera file for --camera: a Kalibr / EuRoC camera yaml (here the real MH_05 one) or a text
+// line; errors name the file and line.
+TEST(Dataset, ReadCameraFileReadsYamlOrText) {
+  const PinholeCamera euroc = ReadCameraFile(DataPath("euroc_mh05_flight/mav0/cam0/sensor.yaml"));
+  EXPECT_EQ(euroc.width, 752);
+  EXPECT_DOUBLE_EQ(euroc.fx, 458.654);
+  EXPECT_DOUBLE_EQ(euroc.distortion[0], -0.28340811);
+  EXPECT_EQ(euroc.model, DistortionModel::kRadialTangential);
+  TempDir dir;
+  dir.Write(
+      "fisheye.txt",
+      "# an equidistant lens\nequidistant 380 379 370 245 752 480 -0.02 0.01 -0.004 0.0005\n");
+  const PinholeCamera kb = ReadCameraFile(dir.Path("fisheye.txt"));
+  EXPECT_EQ(kb.model, DistortionModel::kEquidistant);
+  EXPECT_DOUBLE_EQ(kb.distortion[3], 0.0005);
+  dir.Write("bad.txt", "\n380 379 370\n");
+  ExpectInputError([&] { ReadCameraFile(dir.Path("bad.txt")); }, dir.Path("bad.txt"), 2,
+                   "expected");
+  EXPECT_THROW(ReadCameraFile(dir.Path("missing.yaml")), InputError);
+}
+
 TEST(Dataset, MissingListedImageNamesListAndLine) {
   TempDir dir;
   const TumFolder tum = MakeTumFolder(dir, "seq");
