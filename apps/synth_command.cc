@@ -11,6 +11,7 @@
 #include "imumatch/core/error.h"
 #include "imumatch/core/time.h"
 #include "imumatch/io/dataset.h"
+#include "imumatch/io/euroc_writer.h"
 #include "imumatch/io/output_files.h"
 #include "imumatch/io/synthetic_io.h"
 #include "imumatch/sim/motions.h"
@@ -35,6 +36,7 @@ struct SynthArgs {
   double gain = 1.0;
   bool overwrite = false;
   std::string camera = "kinect";
+  std::string format = "tum";
   CLI::Option* width_option = nullptr;
 };
 
@@ -97,7 +99,11 @@ void RunSynth(const SynthArgs& a) {
   const SyntheticSequence sequence = MakeSyntheticSequence(options, scene);
   SyntheticWriteOptions write_options;
   write_options.overwrite = a.overwrite;
-  WriteSyntheticSequence(sequence, options, a.out, write_options);
+  if (a.format == "euroc") {
+    WriteSyntheticSequenceAsEuroc(sequence, a.out, write_options);
+  } else {
+    WriteSyntheticSequence(sequence, options, a.out, write_options);
+  }
   std::cout << "wrote " << sequence.frames.size() << " frames and " << sequence.imu.size()
             << " IMU samples (" << FormatNsAsSeconds(sequence.imu.front().t_ns) << " - "
             << FormatNsAsSeconds(sequence.imu.back().t_ns) << " s) to " << a.out << "\n";
@@ -111,7 +117,7 @@ void AddSynthCommand(CLI::App& app) {
       "synth",
       "Render a synthetic RGB-D sequence with a simulated IMU and write it as a TUM RGB-D style "
       "folder (rgb/, depth/, rgb.txt, depth.txt, groundtruth.txt, imu.txt, camera.txt, "
-      "sequence.json).");
+      "sequence.json) or, with --format euroc, in the EuRoC / ASL layout (mav0/...).");
   std::string motions;
   for (const std::string& m : MotionNames()) motions += (motions.empty() ? "" : ", ") + m;
   sub->add_option("--motion", args->motion, "Motion: " + motions)->required();
@@ -145,6 +151,12 @@ void AddSynthCommand(CLI::App& app) {
                   "Exposure flicker: every odd frame's intensities times this gain (1 = off)")
       ->capture_default_str()
       ->check(CLI::Range(0.01, 100.0));
+  sub->add_option("--format", args->format,
+                  "Folder layout: tum (rgb/, depth/, *.txt, sequence.json) or euroc (mav0/cam0, "
+                  "imu0, depth0, state_groundtruth_estimate0 with sensor.yaml files, as EuRoC "
+                  "readers take it; gray images, ground truth at the frame times)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"tum", "euroc"}));
   sub->add_flag("--overwrite", args->overwrite, "Write into a non-empty folder");
   sub->callback([args] { RunSynth(*args); });
 }

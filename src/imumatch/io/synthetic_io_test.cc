@@ -5,9 +5,11 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "imumatch/core/error.h"
 #include "imumatch/io/dataset.h"
+#include "imumatch/io/euroc_writer.h"
 #include "imumatch/io/image_io.h"
 #include "imumatch/io/io_test_util.h"
 #include "imumatch/io/text_parsing.h"
@@ -132,6 +134,61 @@ TEST(SyntheticIo, TheLensRoundTrips) {
     const nlohmann::json j = nlohmann::json::parse(ReadFileToString(root + "/sequence.json"));
     EXPECT_EQ(j.at("camera").at("distortion_model"), ToString(model));
   }
+}
+
+// The EuRoC layout: imumatch's own EuRoC reader gets back the same camera (lens included),
+// extrinsic, IMU samples bit for bit, frames with their exact poses, velocities and depth, and
+// the gray image that reading the TUM-style folder gives.
+TEST(SyntheticIo, EurocLayoutRoundTripsThroughTheEurocReader) {
+  SyntheticSequence seq = SmallSequence().sequence;
+  seq.camera.model = DistortionModel::kEquidistant;
+  seq.camera.distortion = {-0.02, 0.01, -0.004, 0.0005, 0.0};
+  seq.cam_from_imu =
+      Rigid3d(Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized())),
+              Eigen::Vector3d(0.01, -0.06, 0.02));
+  TempDir dir;
+  const std::string root = dir.Path("euroc");
+  WriteSyntheticSequenceAsEuroc(seq, root);
+  const Dataset d = LoadDataset(root);
+  EXPECT_EQ(d.kind, DatasetKind::kEuroc);
+  EXPECT_EQ(d.camera.model, DistortionModel::kEquidistant);
+  EXPECT_EQ(d.camera.distortion, seq.camera.distortion);
+  EXPECT_EQ(d.camera.fx, seq.camera.fx);
+  EXPECT_EQ(d.camera.cy, seq.camera.cy);
+  EXPECT_EQ(d.camera.width, seq.camera.width);
+  EXPECT_EQ(d.camera.depth_scale, seq.camera.depth_scale);
+  EXPECT_LT((d.cam_from_imu.translation - seq.cam_from_imu.translation).norm(), 1e-12);
+  EXPECT_LT(RotationDistance(d.cam_from_imu.rotation, seq.cam_from_imu.rotation), 1e-12);
+  EXPECT_EQ(d.imu_params.gyro_noise_density, seq.imu_params.gyro_noise_density);
+  EXPECT_EQ(d.imu_params.accel_random_walk, seq.imu_params.accel_random_walk);
+  ASSERT_EQ(d.imu.size(), seq.imu.size());
+  for (size_t i = 0; i < seq.imu.size(); ++i) {
+    EXPECT_EQ(d.imu.samples()[i].t_ns, seq.imu[i].t_ns);
+    EXPECT_EQ(d.imu.samples()[i].gyro_rad_s, seq.imu[i].gyro_rad_s);
+    EXPECT_EQ(d.imu.samples()[i].accel_m_s2, seq.imu[i].accel_m_s2);
+  }
+  ASSERT_EQ(d.frames.size(), seq.frames.size());
+  for (size_t i = 0; i < seq.frames.size(); ++i) {
+    const SyntheticFrame& f = seq.frames[i];
+    const FrameRecord& r = d.frames[i];
+    EXPECT_EQ(r.t_ns, f.t_ns);
+    ASSERT_TRUE(r.world_from_cam.has_value());
+    // The IMU's pose is what EuRoC records; the camera's follows from the changed extrinsic.
+    const Rigid3d world_from_cam = f.world_from_imu * seq.cam_from_imu.Inverse();
+    EXPECT_LT((r.world_from_cam->translation - world_from_cam.translation).norm(), 1e-9);
+    EXPECT_LT(RotationDistance(r.world_from_cam->rotation, world_from_cam.rotation), 1e-9);
+    ASSERT_TRUE(r.imu_velocity_in_world.has_value());
+    EXPECT_LT((*r.imu_velocity_in_world - f.imu_velocity_in_world).norm(), 1e-12);
+    const cv::Mat gray = LoadImage(r.image_path, ImageColor::kGray);
+    cv::Mat expected;
+    cv::cvtColor(f.rgb, expected, cv::COLOR_BGR2GRAY);
+    EXPECT_EQ(cv::norm(gray, expected, cv::NORM_INF), 0.0) << r.image_path;
+    const cv::Mat depth = LoadDepth(r.depth_path, gray.size());
+    EXPECT_EQ(cv::norm(depth, f.depth, cv::NORM_INF), 0.0) << r.depth_path;
+  }
+  // Not over a sequence that is there, unless asked.
+  EXPECT_THROW(WriteSyntheticSequenceAsEuroc(seq, root), Error);
+  WriteSyntheticSequenceAsEuroc(seq, root, {/*overwrite=*/true});
 }
 
 TEST(SyntheticIo, RefusesNonEmptyFolderUnlessOverwrite) {

@@ -66,7 +66,7 @@ struct SyntheticSequence {
 };
 
 // Renders the named motion through the default synthetic room and simulates its IMU. No file I/O.
-// Throws InvalidArgument for bad options (unknown motion or IMU model, distorted camera, frame
+// Throws InvalidArgument for bad options (unknown motion or IMU model, an invalid camera, frame
 // times outside the trajectory or not increasing).
 SyntheticSequence MakeSyntheticSequence(const SyntheticSequenceOptions& options);
 // Same with a prebuilt scene (options.scene is ignored), e.g. to share its textures.
