@@ -17,7 +17,9 @@
 #include "imumatch/eval/pair_selection.h"
 #include "imumatch/eval/summary.h"
 #include "imumatch/io/dataset.h"
+#include "imumatch/io/euroc_writer.h"
 #include "imumatch/io/pose_pair.h"
+#include "imumatch/io/synthetic_io.h"
 #include "imumatch/io/trajectory_io.h"
 #include "imumatch/sim/motions.h"
 #include "imumatch/sim/synthetic_sequence.h"
@@ -279,6 +281,25 @@ IMU (TUM) get one simulated from a spline through the ground truth (imu_model: '
       .def_readonly("cam_from_imu", &SyntheticSequence::cam_from_imu,
                     "Rigid3d: p_in_cam = cam_from_imu * p_in_imu.");
 
+  m.def(
+      "write_synthetic_sequence",
+      [](const SyntheticSequence& sequence, const std::string& path, const std::string& format,
+         bool overwrite) {
+        SyntheticWriteOptions w;
+        w.overwrite = overwrite;
+        py::gil_scoped_release release;
+        if (format == "euroc") {
+          WriteSyntheticSequenceAsEuroc(sequence, path, w);
+        } else if (format == "tum") {
+          WriteSyntheticSequence(sequence, path, w);
+        } else {
+          throw InvalidArgument("format must be 'tum' or 'euroc', not '" + format + "'");
+        }
+      },
+      py::arg("sequence"), py::arg("path"), py::arg("format") = "tum", py::arg("overwrite") = false,
+      R"(Writes a SyntheticSequence to a folder that load_dataset (and imumatch's commands) read:
+format 'tum' (rgb/, depth/, *.txt, sequence.json, as `imumatch synth`) or 'euroc' (the EuRoC / ASL
+layout, mav0/..., as `imumatch synth --format euroc`).)");
   m.def("motion_names", &MotionNames, "Names of the synthetic motions (e.g. 'front1m', 'left30').");
   m.def(
       "make_synthetic_sequence",

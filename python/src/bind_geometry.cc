@@ -19,6 +19,7 @@
 #include "imumatch/imu/imu_buffer.h"
 #include "imumatch/imu/imu_integrator.h"
 #include "imumatch/imu/imu_params.h"
+#include "imumatch/io/dataset.h"
 
 namespace imumatch::python {
 
@@ -230,8 +231,10 @@ K x the undistorted bearing: where the guided matcher predicts and searches.)")
           },
           py::arg("uv"), "Image pixels -> undistorted normalized coordinates (x/z, y/z).")
       .def("__repr__", &PinholeCamera::ToString, "Size, intrinsics, distortion, depth scale.");
-  m.def("read_camera", &ReadCameraFromText, py::arg("path"),
-        "Reads a camera text file (fx fy cx cy [k1 k2 p1 p2 k3] and size); raises InputError.");
+  m.def("read_camera", &ReadCameraFile, py::arg("path"),
+        "Reads a camera file: a Kalibr/EuRoC camera sensor.yaml (*.yaml) or a text line "
+        "('[radtan|equidistant] fx fy cx cy [width height [k...]]'); raises InputError naming "
+        "the file and line.");
 
   // ----------------------------------------------------------------------------------- imu
   py::class_<ImuParams>(m, "ImuParams",

@@ -161,3 +161,20 @@ def test_a_synthetic_sequence_through_a_lens_agrees_with_opencv_undistortion():
     assert np.mean(rel < 0.01) > 0.95
     # Reading the same pixel of the lens-free image instead is far off: the lens matters here.
     assert np.median(rel_naive) > 5 * np.median(rel)
+
+
+def test_a_synthetic_sequence_written_in_both_layouts_loads_back(tmp_path):
+    seq = imumatch.make_synthetic_sequence("left30", frame_times_s=[1.0, 1.05, 1.1])
+    imumatch.write_synthetic_sequence(seq, str(tmp_path / "tum"))
+    imumatch.write_synthetic_sequence(seq, str(tmp_path / "euroc"), format="euroc")
+    for folder in ("tum", "euroc"):
+        d = imumatch.load_dataset(str(tmp_path / folder))
+        assert len(d) == 3
+        assert d.camera.fx == seq.camera.fx
+        gray, depth = d.read_frame(1)
+        assert gray.shape == (480, 640) and depth.dtype == np.uint16
+        assert np.array_equal(depth, seq.frames[1].depth)
+    with pytest.raises(ValueError):
+        imumatch.write_synthetic_sequence(seq, str(tmp_path / "x"), format="kitti")
+    assert imumatch.read_camera(os.path.join(data_dir(), "euroc_mh05_flight", "mav0", "cam0",
+                                             "sensor.yaml")).width == 752
