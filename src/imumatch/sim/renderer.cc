@@ -261,8 +261,13 @@ RenderedView RenderView(const Scene& scene, const PinholeCamera& camera,
       return Eigen::Vector2d(ideal[i], ideal[i + 1]);
     };
     const Eigen::Vector2d p = at(u, v);
-    const Eigen::Vector2d step_u = u + 1 < width ? at(u + 1, v) - p : p - at(u - 1, v);
-    const Eigen::Vector2d step_v = v + 1 < height ? at(u, v + 1) - p : p - at(u, v - 1);
+    // One-pixel images have no neighbour: the lens's stretch is then taken as none.
+    const Eigen::Vector2d step_u = u + 1 < width ? at(u + 1, v) - p
+                                   : u > 0       ? p - at(u - 1, v)
+                                                 : Eigen::Vector2d(1.0, 0.0);
+    const Eigen::Vector2d step_v = v + 1 < height ? at(u, v + 1) - p
+                                   : v > 0        ? p - at(u, v - 1)
+                                                  : Eigen::Vector2d(0.0, 1.0);
     return PixelRay{p.x(), p.y(), step_u, step_v};
   };
 

@@ -347,6 +347,25 @@ TEST(RendererTest, KinectDepthNoiseAndHoles) {
   EXPECT_EQ(graze.depth.at<uint16_t>(120, 300), clean.depth.at<uint16_t>(120, 300));
 }
 
+// A one-pixel-wide (and one-pixel-high) camera with a lens renders without reading beyond the
+// image (ASan checks the neighbour lookups).
+TEST(RendererTest, OnePixelCameraWithALens) {
+  PinholeCamera tiny = PinholeCamera::EurocCam0();
+  tiny.width = 1;
+  tiny.height = 1;
+  tiny.cx = tiny.cy = 0.0;
+  SceneOptions small;
+  small.texel_size_m = 0.05;
+  small.furniture = false;
+  const Scene scene(small);
+  const Rigid3d world_from_cam = WorldFromCam(Eigen::Vector3d(1.0, 0.2, 1.4), 12.0, -5.0);
+  const RenderedView view = RenderView(scene, tiny, world_from_cam);
+  ASSERT_EQ(view.depth.size(), cv::Size(1, 1));
+  EXPECT_NEAR(view.depth.at<uint16_t>(0, 0),
+              AnalyticDepth(scene, tiny, world_from_cam, Eigen::Vector2d(0, 0)) * tiny.depth_scale,
+              0.5 + 1e-3);
+}
+
 TEST(RendererTest, RejectsBadInput) {
   PinholeCamera bad_camera = PinholeCamera::KinectDefault();
   bad_camera.fx = 0.0;
