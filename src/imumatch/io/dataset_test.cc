@@ -13,6 +13,7 @@
 #include "imumatch/io/euroc.h"
 #include "imumatch/io/image_io.h"
 #include "imumatch/io/io_test_util.h"
+#include "imumatch/io/pose_pair.h"
 #include "imumatch/io/trajectory_io.h"
 #include "imumatch/sim/trajectory.h"
 #include "imumatch/testing/test_data.h"
@@ -426,6 +427,18 @@ TEST(Dataset, ReadCameraFileReadsYamlOrText) {
   ExpectInputError([&] { ReadCameraFile(dir.Path("bad.txt")); }, dir.Path("bad.txt"), 2,
                    "expected");
   EXPECT_THROW(ReadCameraFile(dir.Path("missing.yaml")), InputError);
+}
+
+// The camera override reaches a two-frame pose-pair folder too (eval --camera on the TUM pair).
+TEST(Dataset, PosePairFolderTakesTheCameraOverride) {
+  const std::string pair = DataPath("tum_fr1_xyz_pair");
+  EXPECT_DOUBLE_EQ(LoadDatasetOrPosePair(pair).camera.fx, 525.0);  // the excerpt's Kinect values
+  DatasetOptions options;
+  options.camera = PinholeCamera::TumFreiburg1();
+  const Dataset d = LoadDatasetOrPosePair(pair, options);
+  EXPECT_DOUBLE_EQ(d.camera.fx, 517.3);
+  EXPECT_TRUE(d.camera.HasDistortion());
+  EXPECT_EQ(d.frames.size(), 2u);
 }
 
 TEST(Dataset, MissingListedImageNamesListAndLine) {

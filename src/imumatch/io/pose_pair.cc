@@ -48,7 +48,8 @@ Dataset LoadPosePairFolder(const std::string& dir, const PinholeCamera& camera,
 }
 
 Dataset LoadDatasetOrPosePair(const std::string& path, const DatasetOptions& options) {
-  return IsPosePairFolder(path) ? LoadPosePairFolder(path) : LoadDataset(path, options);
+  if (!IsPosePairFolder(path)) return LoadDataset(path, options);
+  return options.camera ? LoadPosePairFolder(path, *options.camera) : LoadPosePairFolder(path);
 }
 
 }  // namespace imumatch

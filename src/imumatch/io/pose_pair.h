@@ -21,7 +21,7 @@ Dataset LoadPosePairFolder(const std::string& dir,
                            int64_t frame_interval_ns = 33'333'333);
 
 // What `eval` reads from a path: a two-frame pose-pair folder, or any layout LoadDataset knows
-// (options apply to the latter).
+// (options apply to the latter; of them, a pose-pair folder takes only the camera override).
 Dataset LoadDatasetOrPosePair(const std::string& path,
                               const DatasetOptions& options = DatasetOptions());
 
