@@ -125,7 +125,7 @@ void WriteSyntheticSequenceAsEuroc(const SyntheticSequence& seq, const std::stri
   // Sensors: the body is the IMU (EuRoC's convention).
   const PinholeCamera& c = seq.camera;
   const bool equidistant = c.model == DistortionModel::kEquidistant;
-  double rate_hz = 0.0;
+  double rate_hz = 1.0;  // one frame has no rate; readers require a positive one
   if (seq.frames.size() >= 2) {
     rate_hz = 1e9 * static_cast<double>(seq.frames.size() - 1) /
               static_cast<double>(seq.frames.back().t_ns - seq.frames.front().t_ns);

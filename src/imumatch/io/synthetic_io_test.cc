@@ -189,6 +189,10 @@ TEST(SyntheticIo, EurocLayoutRoundTripsThroughTheEurocReader) {
   // Not over a sequence that is there, unless asked.
   EXPECT_THROW(WriteSyntheticSequenceAsEuroc(seq, root), Error);
   WriteSyntheticSequenceAsEuroc(seq, root, {/*overwrite=*/true});
+  // One frame (no frame rate to state) still makes a readable folder.
+  seq.frames.resize(1);
+  WriteSyntheticSequenceAsEuroc(seq, root, {/*overwrite=*/true});
+  EXPECT_EQ(LoadDataset(root).frames.size(), 1u);
 }
 
 TEST(SyntheticIo, RefusesNonEmptyFolderUnlessOverwrite) {
