@@ -52,4 +52,5 @@ PYBIND11_MODULE(_imumatch, m) {
   imumatch::python::BindGeometry(m);
   imumatch::python::BindMatching(m);
   imumatch::python::BindData(m);
+  imumatch::python::BindTrack(m);
 }

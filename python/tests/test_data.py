@@ -178,3 +178,27 @@ def test_a_synthetic_sequence_written_in_both_layouts_loads_back(tmp_path):
         imumatch.write_synthetic_sequence(seq, str(tmp_path / "x"), format="kitti")
     assert imumatch.read_camera(os.path.join(data_dir(), "euroc_mh05_flight", "mav0", "cam0",
                                              "sensor.yaml")).width == 752
+
+
+def test_the_front_end_tracks_a_synthetic_walk_without_ground_truth():
+    # Frames after the walk's 0.5 s still start; the IMU log starts at t = 0, so the front end
+    # takes gravity and bias from the still part. The ground truth only judges afterwards.
+    times = [0.6 + k / 30.0 for k in range(12)]
+    seq = imumatch.make_synthetic_sequence("walk", frame_times_s=times)
+    out = imumatch.track(seq, detector="orb")
+    frames = out["frames"]
+    assert len(frames) == 12 and out["fallbacks"] == 0
+    assert frames[0]["status"] == "first"
+    assert all(f["status"] == "guided" for f in frames[1:])
+    assert all(isinstance(f["world_from_cam"], imumatch.Rigid3d) for f in frames)
+    # Against the exact poses: millimetres and hundredths of a degree per frame.
+    assert out["rpe"]["pairs"] == 11
+    assert out["rpe"]["rmse_translation_m"] < 0.003
+    assert out["rpe"]["rmse_rotation_deg"] < 0.05
+    judged = [f for f in frames[1:] if f["judged"]]
+    assert len(judged) == 11
+    assert min(f["precision"][1.0] for f in judged) > 0.97
+    assert min(f["matches"] for f in judged) > 500
+    # A dataset without an IMU cannot be tracked: the error says so.
+    with pytest.raises(imumatch.InputError):
+        imumatch.track(os.path.join(data_dir(), "tum_fr1_xyz_pair"))
