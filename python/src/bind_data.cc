@@ -335,20 +335,9 @@ stay exact. Rendering costs ~0.1 s per 640 x 480 frame.)");
          const std::string& motion_source, int max_keypoints, std::optional<double> threshold_px,
          bool refine, bool second_pass, bool monocular, uint64_t seed, bool details,
          const std::string& imu_model) {
-        EvalSource source;
-        if (py::isinstance<SyntheticSequence>(dataset)) {
-          source = MakeSyntheticSource(dataset.cast<const SyntheticSequence&>(), "");
-        } else if (py::isinstance<Dataset>(dataset)) {
-          source = MakeDiskSource(dataset.cast<Dataset>());
-        } else {
-          DatasetOptions dopts;
-          dopts.imu_model = imu_model;
-          dopts.imu_seed = seed;
-          source = MakeDiskSource(LoadDatasetOrPosePair(dataset.cast<std::string>(), dopts));
-        }
-        return Evaluate(std::move(source), detectors, methods, max_pairs, step, interval_s,
-                        motion_source, max_keypoints, threshold_px, refine, second_pass, monocular,
-                        seed, details);
+        return Evaluate(SourceFromPython(dataset, imu_model, seed), detectors, methods, max_pairs,
+                        step, interval_s, motion_source, max_keypoints, threshold_px, refine,
+                        second_pass, monocular, seed, details);
       },
       py::arg("dataset"),
       py::arg("detectors") =

@@ -9,6 +9,7 @@
 #include <pybind11/stl.h>
 
 #include "bindings.h"
+#include "conversions.h"
 #include "imumatch/core/error.h"
 #include "imumatch/eval/frame_source.h"
 #include "imumatch/eval/track_run.h"
@@ -64,18 +65,9 @@ void BindTrack(py::module_& m) {
       [](const py::object& dataset, const std::string& detector, int max_keypoints, bool hybrid,
          bool second_pass, bool monocular, double still_s, size_t first_frame, size_t max_frames,
          const std::vector<double>& thresholds_px, const std::string& imu_model, uint64_t seed) {
-        EvalSource source;
-        if (py::isinstance<SyntheticSequence>(dataset)) {
-          source = MakeSyntheticSource(dataset.cast<const SyntheticSequence&>(), "");
-        } else if (py::isinstance<Dataset>(dataset)) {
-          source = MakeDiskSource(dataset.cast<Dataset>());
-        } else {
-          DatasetOptions dopts;
-          dopts.imu_model = imu_model;
-          dopts.imu_seed = seed;
-          dopts.check_files_exist = false;  // a missing image is a bad frame, as in `track`
-          source = MakeDiskSource(LoadDatasetOrPosePair(dataset.cast<std::string>(), dopts));
-        }
+        // A missing image is a bad frame, as in `imumatch track`.
+        const EvalSource source =
+            SourceFromPython(dataset, imu_model, seed, /*check_files_exist=*/false);
         TrackRunOptions o;
         o.front_end.features.kind = ParseDetectorKind(detector);
         o.front_end.features.max_keypoints = max_keypoints;

@@ -5,6 +5,9 @@
 #include <vector>
 
 #include "imumatch/core/error.h"
+#include "imumatch/io/dataset.h"
+#include "imumatch/io/pose_pair.h"
+#include "imumatch/sim/synthetic_sequence.h"
 
 namespace imumatch::python {
 
@@ -145,6 +148,19 @@ py::array_t<double> KeypointsToArray(const std::vector<cv::KeyPoint>& keypoints)
     w(k, 6) = kp.class_id;
   }
   return a;
+}
+
+EvalSource SourceFromPython(const py::object& dataset, const std::string& imu_model, uint64_t seed,
+                            bool check_files_exist) {
+  if (py::isinstance<SyntheticSequence>(dataset)) {
+    return MakeSyntheticSource(dataset.cast<const SyntheticSequence&>(), "");
+  }
+  if (py::isinstance<Dataset>(dataset)) return MakeDiskSource(dataset.cast<Dataset>());
+  DatasetOptions options;
+  options.imu_model = imu_model;
+  options.imu_seed = seed;
+  options.check_files_exist = check_files_exist;
+  return MakeDiskSource(LoadDatasetOrPosePair(dataset.cast<std::string>(), options));
 }
 
 }  // namespace imumatch::python

@@ -2,12 +2,15 @@
 
 // NumPy <-> OpenCV / imumatch conversions shared by the binding files.
 
+#include <cstdint>
+#include <string>
 #include <vector>
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <opencv2/core.hpp>
 
+#include "imumatch/eval/frame_source.h"
 #include "imumatch/matching/match_types.h"
 
 namespace imumatch::python {
@@ -31,5 +34,11 @@ py::array MatToArray(cv::Mat mat);
 // class_id) or an N x 2 / N x 7 array with columns x, y, size, angle, response, octave, class_id.
 std::vector<cv::KeyPoint> ToKeypoints(const py::handle& object);
 py::array_t<double> KeypointsToArray(const std::vector<cv::KeyPoint>& keypoints);
+
+// The `dataset` argument of evaluate() and track(): a SyntheticSequence (exact truth, in memory),
+// a Dataset, or a path (LoadDatasetOrPosePair with the simulated IMU's model and seed; with
+// check_files_exist false a missing image is a bad frame found when it is read).
+EvalSource SourceFromPython(const py::object& dataset, const std::string& imu_model, uint64_t seed,
+                            bool check_files_exist = true);
 
 }  // namespace imumatch::python

@@ -42,20 +42,9 @@ void CreateFolder(const fs::path& path) {
 
 void WriteSyntheticSequenceAsEuroc(const SyntheticSequence& seq, const std::string& dir_name,
                                    const SyntheticWriteOptions& write_options) {
-  IMUMATCH_CHECK(!seq.frames.empty(), "the synthetic sequence has no frames");
-  for (size_t i = 1; i < seq.frames.size(); ++i) {
-    IMUMATCH_CHECK(seq.frames[i].t_ns > seq.frames[i - 1].t_ns,
-                   "frame timestamps must increase (frame " << i << ")");
-  }
+  CheckSyntheticWrite(seq, dir_name, write_options);
   seq.camera.Check();
   const fs::path dir(dir_name);
-  std::error_code ec;
-  if (fs::exists(dir, ec)) {
-    if (!fs::is_directory(dir, ec)) throw Error(dir_name + " exists and is not a folder");
-    if (!write_options.overwrite && !fs::is_empty(dir, ec)) {
-      throw Error("output folder " + dir_name + " is not empty (allow overwriting to replace it)");
-    }
-  }
   const fs::path mav0 = dir / "mav0";
   bool any_depth = false;
   for (const SyntheticFrame& f : seq.frames) any_depth |= !f.depth.empty();

@@ -28,19 +28,9 @@ void WriteText(const fs::path& path, const std::string& text) {
 
 void WriteSequence(const SyntheticSequence& seq, const SyntheticSequenceOptions* generated_with,
                    const std::string& dir_name, const SyntheticWriteOptions& write_options) {
-  IMUMATCH_CHECK(!seq.frames.empty(), "the synthetic sequence has no frames");
-  for (size_t i = 1; i < seq.frames.size(); ++i) {
-    IMUMATCH_CHECK(seq.frames[i].t_ns > seq.frames[i - 1].t_ns,
-                   "frame timestamps must increase (frame " << i << ")");
-  }
+  CheckSyntheticWrite(seq, dir_name, write_options);
   const fs::path dir(dir_name);
   std::error_code ec;
-  if (fs::exists(dir, ec)) {
-    if (!fs::is_directory(dir, ec)) throw Error(dir_name + " exists and is not a folder");
-    if (!write_options.overwrite && !fs::is_empty(dir, ec)) {
-      throw Error("output folder " + dir_name + " is not empty (allow overwriting to replace it)");
-    }
-  }
   fs::create_directories(dir / "rgb", ec);
   if (ec) throw Error("cannot create folder " + (dir / "rgb").string() + ": " + ec.message());
   fs::create_directories(dir / "depth", ec);
@@ -134,6 +124,23 @@ void WriteSequence(const SyntheticSequence& seq, const SyntheticSequenceOptions*
 }
 
 }  // namespace
+
+void CheckSyntheticWrite(const SyntheticSequence& seq, const std::string& dir_name,
+                         const SyntheticWriteOptions& write_options) {
+  IMUMATCH_CHECK(!seq.frames.empty(), "the synthetic sequence has no frames");
+  for (size_t i = 1; i < seq.frames.size(); ++i) {
+    IMUMATCH_CHECK(seq.frames[i].t_ns > seq.frames[i - 1].t_ns,
+                   "frame timestamps must increase (frame " << i << ")");
+  }
+  const fs::path dir(dir_name);
+  std::error_code ec;
+  if (fs::exists(dir, ec)) {
+    if (!fs::is_directory(dir, ec)) throw Error(dir_name + " exists and is not a folder");
+    if (!write_options.overwrite && !fs::is_empty(dir, ec)) {
+      throw Error("output folder " + dir_name + " is not empty (allow overwriting to replace it)");
+    }
+  }
+}
 
 void WriteSyntheticSequence(const SyntheticSequence& sequence, const std::string& dir,
                             const SyntheticWriteOptions& write_options) {

@@ -22,6 +22,11 @@ struct SyntheticWriteOptions {
   bool overwrite = false;
 };
 
+// What every writer of a synthetic sequence checks first: frames, increasing timestamps, and an
+// output folder that is absent, empty or allowed to be overwritten. Throws InvalidArgument / Error.
+void CheckSyntheticWrite(const SyntheticSequence& sequence, const std::string& dir,
+                         const SyntheticWriteOptions& write_options);
+
 // The options (when known) record how the sequence was made: imu model name, seed, frame rate,
 // depth noise. Without them those fields of sequence.json are null.
 void WriteSyntheticSequence(const SyntheticSequence& sequence, const std::string& dir,
