@@ -81,6 +81,13 @@ struct PinholeCamera {
   void Check() const;
 
   bool HasDistortion() const;
+  // Same size, intrinsics and lens (model and coefficients): pixels map to the same rays. The
+  // depth scale is not compared. For caches of per-camera tables.
+  bool SameImageGeometry(const PinholeCamera& other) const {
+    return width == other.width && height == other.height && fx == other.fx && fy == other.fy &&
+           cx == other.cx && cy == other.cy && model == other.model &&
+           distortion == other.distortion;
+  }
   Eigen::Matrix3d K() const;
 
   // Camera point -> pixel. nullopt when z <= 0 (behind or on the camera plane).

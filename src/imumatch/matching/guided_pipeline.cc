@@ -6,12 +6,7 @@
 namespace imumatch {
 
 const PixelUndistorter& GuidedMatcherWorkspace::UndistorterFor(const PinholeCamera& camera) {
-  const PinholeCamera& c = undistorter_.camera();
-  const bool same = has_undistorter_ && c.width == camera.width && c.height == camera.height &&
-                    c.fx == camera.fx && c.fy == camera.fy && c.cx == camera.cx &&
-                    c.cy == camera.cy && c.model == camera.model &&
-                    c.distortion == camera.distortion;
-  if (!same) {
+  if (!has_undistorter_ || !undistorter_.camera().SameImageGeometry(camera)) {
     undistorter_ = PixelUndistorter(camera);
     has_undistorter_ = true;
   }

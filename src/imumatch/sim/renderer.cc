@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <random>
 #include <thread>
 #include <vector>
@@ -219,8 +220,24 @@ void RenderOptions::Check() const {
   depth_noise.Check();
 }
 
+LensRayMap::LensRayMap(const PinholeCamera& camera) : camera_(camera) {
+  camera.Check();
+  if (!camera.HasDistortion()) return;
+  const int width = camera.width, height = camera.height;
+  ideal_.resize(static_cast<size_t>(width) * height * 2);
+  for (int v = 0; v < height; ++v) {
+    for (int u = 0; u < width; ++u) {
+      const size_t i = (static_cast<size_t>(v) * width + u) * 2;
+      ideal_[i] = static_cast<float>(u);
+      ideal_[i + 1] = static_cast<float>(v);
+    }
+  }
+  PixelUndistorter(camera).ToIdealInPlace(ideal_.data(), width * height, 2);
+}
+
 RenderedView RenderView(const Scene& scene, const PinholeCamera& camera,
-                        const Rigid3d& world_from_cam, const RenderOptions& options) {
+                        const Rigid3d& world_from_cam, const RenderOptions& options,
+                        const LensRayMap* lens_rays) {
   camera.Check();
   options.Check();
   IMUMATCH_CHECK(
@@ -234,21 +251,17 @@ RenderedView RenderView(const Scene& scene, const PinholeCamera& camera,
   cv::Mat surface_ids(height, width, CV_32S);
   const DepthNoiseOptions& noise = options.depth_noise;
 
-  // Through a lens, every pixel centre's ideal pixel (PixelUndistorter: the lens model inverted
-  // to float rounding) and the ideal-pixel steps to its right and lower neighbours (the lens's
-  // Jacobian, for the texture filter's footprint and the edge sub-samples).
+  // Through a lens, every pixel centre's ideal pixel (the caller's map, or one made here) and the
+  // ideal-pixel steps to its right and lower neighbours (the lens's Jacobian, for the texture
+  // filter's footprint and the edge sub-samples).
   const bool distorted = camera.HasDistortion();
-  std::vector<float> ideal;
-  if (distorted) {
-    ideal.resize(static_cast<size_t>(width) * height * 2);
-    for (int v = 0; v < height; ++v) {
-      for (int u = 0; u < width; ++u) {
-        const size_t i = (static_cast<size_t>(v) * width + u) * 2;
-        ideal[i] = static_cast<float>(u);
-        ideal[i + 1] = static_cast<float>(v);
-      }
-    }
-    PixelUndistorter(camera).ToIdealInPlace(ideal.data(), width * height, 2);
+  std::optional<LensRayMap> own_rays;
+  if (lens_rays != nullptr) {
+    IMUMATCH_CHECK(lens_rays->camera().SameImageGeometry(camera),
+                   "RenderView: the LensRayMap was made for another camera");
+  } else if (distorted) {
+    own_rays.emplace(camera);
+    lens_rays = &*own_rays;
   }
   struct PixelRay {
     double u, v;
@@ -257,8 +270,8 @@ RenderedView RenderView(const Scene& scene, const PinholeCamera& camera,
   const auto ray_of = [&](int u, int v) {
     if (!distorted) return PixelRay{double(u), double(v), {1.0, 0.0}, {0.0, 1.0}};
     const auto at = [&](int uu, int vv) {
-      const size_t i = (static_cast<size_t>(vv) * width + uu) * 2;
-      return Eigen::Vector2d(ideal[i], ideal[i + 1]);
+      const float* p = lens_rays->At(uu, vv);
+      return Eigen::Vector2d(p[0], p[1]);
     };
     const Eigen::Vector2d p = at(u, v);
     // One-pixel images have no neighbour: the lens's stretch is then taken as none.

@@ -366,6 +366,27 @@ TEST(RendererTest, OnePixelCameraWithALens) {
               0.5 + 1e-3);
 }
 
+// A sequence computes its lens's ray map once and passes it to every frame: the same images as a
+// map made per frame; a map of another camera is refused.
+TEST(RendererTest, ASharedLensRayMapRendersTheSameFrame) {
+  SceneOptions small;
+  small.texel_size_m = 0.05;
+  small.furniture = false;
+  const Scene scene(small);
+  const PinholeCamera camera = PinholeCamera::EurocCam0().ScaledToWidth(188);
+  const Rigid3d world_from_cam = WorldFromCam(Eigen::Vector3d(1.0, 0.2, 1.4), 12.0, -5.0);
+  const LensRayMap rays(camera);
+  ASSERT_FALSE(rays.empty());
+  const RenderedView shared = RenderView(scene, camera, world_from_cam, RenderOptions(), &rays);
+  const RenderedView own = RenderView(scene, camera, world_from_cam);
+  EXPECT_EQ(cv::norm(shared.rgb, own.rgb, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(shared.depth, own.depth, cv::NORM_INF), 0.0);
+  PinholeCamera other = camera;
+  other.distortion[0] = -0.2;
+  EXPECT_THROW(RenderView(scene, other, world_from_cam, RenderOptions(), &rays), InvalidArgument);
+  EXPECT_TRUE(LensRayMap(PinholeCamera::KinectDefault()).empty());  // no lens: no map
+}
+
 TEST(RendererTest, RejectsBadInput) {
   PinholeCamera bad_camera = PinholeCamera::KinectDefault();
   bad_camera.fx = 0.0;

@@ -94,6 +94,7 @@ SyntheticSequence MakeSyntheticSequence(const Trajectory& trajectory,
 
   const Rigid3d imu_from_cam = options.cam_from_imu.Inverse();
   RenderOptions render = options.render;
+  const LensRayMap lens_rays(options.camera);  // once for all frames
   for (size_t k = 0; k < times.size(); ++k) {
     SyntheticFrame frame;
     frame.t_ns = options.t0_ns + SecondsToNs(times[k]);
@@ -101,7 +102,7 @@ SyntheticSequence MakeSyntheticSequence(const Trajectory& trajectory,
     frame.world_from_cam = frame.world_from_imu * imu_from_cam;
     frame.imu_velocity_in_world = trajectory.VelocityInWorld(times[k]);
     render.depth_noise.seed = options.render.depth_noise.seed + k;
-    RenderedView view = RenderView(scene, options.camera, frame.world_from_cam, render);
+    RenderedView view = RenderView(scene, options.camera, frame.world_from_cam, render, &lens_rays);
     if (options.odd_frame_gain != 1.0 && k % 2 == 1) {
       view.rgb.convertTo(frame.rgb, -1, options.odd_frame_gain);
     } else {
