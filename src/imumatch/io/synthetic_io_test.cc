@@ -52,6 +52,16 @@ const Small& SmallSequence() {
   return small;
 }
 
+// The IMU read back, sample by sample, bit for bit (both layouts write the samples exactly).
+void ExpectTheSameImu(const Dataset& d, const SyntheticSequence& seq) {
+  ASSERT_EQ(d.imu.size(), seq.imu.size());
+  for (size_t i = 0; i < seq.imu.size(); ++i) {
+    EXPECT_EQ(d.imu.samples()[i].t_ns, seq.imu[i].t_ns);
+    EXPECT_EQ(d.imu.samples()[i].gyro_rad_s, seq.imu[i].gyro_rad_s);
+    EXPECT_EQ(d.imu.samples()[i].accel_m_s2, seq.imu[i].accel_m_s2);
+  }
+}
+
 TEST(SyntheticIo, WriteThenLoadRoundTripsExactly) {
   const Small& small = SmallSequence();
   const SyntheticSequence& seq = small.sequence;
@@ -94,13 +104,7 @@ TEST(SyntheticIo, WriteThenLoadRoundTripsExactly) {
     EXPECT_EQ(cv::norm(rgb, f.rgb, cv::NORM_INF), 0.0) << r.image_path;
     EXPECT_EQ(cv::norm(depth, f.depth, cv::NORM_INF), 0.0) << r.depth_path;
   }
-  // The IMU, sample by sample, bit for bit.
-  ASSERT_EQ(d.imu.size(), seq.imu.size());
-  for (size_t i = 0; i < seq.imu.size(); ++i) {
-    EXPECT_EQ(d.imu.samples()[i].t_ns, seq.imu[i].t_ns);
-    EXPECT_EQ(d.imu.samples()[i].gyro_rad_s, seq.imu[i].gyro_rad_s);
-    EXPECT_EQ(d.imu.samples()[i].accel_m_s2, seq.imu[i].accel_m_s2);
-  }
+  ExpectTheSameImu(d, seq);
   // sequence.json says what made it.
   const nlohmann::json j = nlohmann::json::parse(ReadFileToString(root + "/sequence.json"));
   EXPECT_EQ(j.at("generator"), "imumatch synth");
@@ -161,12 +165,7 @@ TEST(SyntheticIo, EurocLayoutRoundTripsThroughTheEurocReader) {
   EXPECT_LT(RotationDistance(d.cam_from_imu.rotation, seq.cam_from_imu.rotation), 1e-12);
   EXPECT_EQ(d.imu_params.gyro_noise_density, seq.imu_params.gyro_noise_density);
   EXPECT_EQ(d.imu_params.accel_random_walk, seq.imu_params.accel_random_walk);
-  ASSERT_EQ(d.imu.size(), seq.imu.size());
-  for (size_t i = 0; i < seq.imu.size(); ++i) {
-    EXPECT_EQ(d.imu.samples()[i].t_ns, seq.imu[i].t_ns);
-    EXPECT_EQ(d.imu.samples()[i].gyro_rad_s, seq.imu[i].gyro_rad_s);
-    EXPECT_EQ(d.imu.samples()[i].accel_m_s2, seq.imu[i].accel_m_s2);
-  }
+  ExpectTheSameImu(d, seq);
   ASSERT_EQ(d.frames.size(), seq.frames.size());
   for (size_t i = 0; i < seq.frames.size(); ++i) {
     const SyntheticFrame& f = seq.frames[i];
