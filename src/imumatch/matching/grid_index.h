@@ -136,13 +136,14 @@ class GridIndex {
 
   void BuildStrided(const unsigned char* xs, const unsigned char* ys, size_t stride, int n,
                     int width, int height, float cell_size);
+  // Clamped into the grid; NaN gives 0 (never converted: a NaN float to int is undefined).
   int CellCol(float x) const {
     const float c = std::floor(x * inv_cell_);
-    return c < 0.0f ? 0 : (c >= static_cast<float>(cols_) ? cols_ - 1 : static_cast<int>(c));
+    return c >= 0.0f ? (c < static_cast<float>(cols_) ? static_cast<int>(c) : cols_ - 1) : 0;
   }
   int CellRow(float y) const {
     const float r = std::floor(y * inv_cell_);
-    return r < 0.0f ? 0 : (r >= static_cast<float>(rows_) ? rows_ - 1 : static_cast<int>(r));
+    return r >= 0.0f ? (r < static_cast<float>(rows_) ? static_cast<int>(r) : rows_ - 1) : 0;
   }
 
   float cell_size_ = 1.0f;

@@ -112,6 +112,24 @@ TEST(GridIndexTest, CapsuleRunsHoldEveryPointOfTheCapsule) {
   EXPECT_EQ(grid.CollectSlotsInCapsule(0, 0, 10, 10, -1, -1e9f, -1e9f, 1e9f, 1e9f, &slots), 0u);
 }
 
+TEST(GridIndexTest, PointsWithoutPositionAreHeldButNeverFound) {
+  // A keypoint outside a fisheye's field of view has a NaN ideal position: indexed (slot counts
+  // stay those of the input) but in no query's answer, and never converted to a cell by a cast.
+  const float nan = std::nanf("");
+  const std::vector<float> xs = {10.0f, nan, 300.0f, nan, 5.0f};
+  const std::vector<float> ys = {10.0f, 20.0f, nan, nan, 470.0f};
+  GridIndex grid;
+  grid.Build(xs.data(), ys.data(), static_cast<int>(xs.size()), 640, 480, 8.0f);
+  EXPECT_EQ(grid.size(), 5);
+  EXPECT_EQ(grid.QueryBox(-1e9f, -1e9f, 1e9f, 1e9f), (std::vector<int>{0, 4}));
+  std::vector<int> slots;
+  grid.CollectSlotsInCapsule(0, 0, 640, 480, 1e4f, -1e9f, -1e9f, 1e9f, 1e9f, &slots);
+  std::vector<int> found;
+  for (const int s : slots) found.push_back(grid.slot_index(s));
+  std::sort(found.begin(), found.end());
+  EXPECT_EQ(found, (std::vector<int>{0, 4}));
+}
+
 TEST(GridIndexTest, CallbackGivesCoordinatesAndRebuildReplacesContent) {
   GridIndex grid;
   const float xs[3] = {10.5f, 300.0f, 639.0f}, ys[3] = {20.25f, 200.0f, 479.0f};
