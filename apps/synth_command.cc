@@ -53,9 +53,10 @@ PinholeCamera SynthCamera(const SynthArgs& a) {
   }
   if (a.camera == "euroc") return PinholeCamera::EurocCam0();
   if (a.camera == "tum-fr1") return PinholeCamera::TumFreiburg1();
+  if (a.camera == "tum-vi") return PinholeCamera::TumViCam0();
   if (!std::filesystem::is_regular_file(a.camera)) {
     throw InvalidArgument("--camera '" + a.camera +
-                          "': not kinect, euroc or tum-fr1, and no such file");
+                          "': not kinect, euroc, tum-fr1 or tum-vi, and no such file");
   }
   return ReadCameraFile(a.camera);
 }
@@ -134,13 +135,15 @@ void AddSynthCommand(CLI::App& app) {
       sub->add_option("--width", args->width,
                       "Image width in pixels of the kinect camera (4:3, Kinect-like intrinsics)")
           ->capture_default_str();
-  sub->add_option("--camera", args->camera,
-                  "Camera to render with: kinect (pinhole, scaled to --width), euroc (EuRoC MAV "
-                  "cam0: 752x480, radial-tangential lens, k1 = -0.28), tum-fr1 (TUM fr1 "
-                  "calibration with its lens), or a camera file: a Kalibr/EuRoC camera sensor.yaml "
-                  "or a text line as camera.txt ('[radtan|equidistant] fx fy cx cy width height "
-                  "k...'); the images are rendered through the lens, the depth and poses stay "
-                  "exact")
+  sub->add_option(
+         "--camera", args->camera,
+         "Camera to render with: kinect (pinhole, scaled to --width), euroc (EuRoC MAV "
+         "cam0: 752x480, radial-tangential lens, k1 = -0.28), tum-fr1 (TUM fr1 "
+         "calibration with its lens), tum-vi (TUM-VI 512x512 fisheye, equidistant, "
+         "black beyond 80 deg off-axis), or a camera file: a Kalibr/EuRoC camera sensor.yaml "
+         "or a text line as camera.txt ('[radtan|equidistant] fx fy cx cy width height "
+         "k...'); the images are rendered through the lens, the depth and poses stay "
+         "exact")
       ->capture_default_str();
   sub->add_option("--duration", args->duration_s, "Duration of the motion (s), default per motion");
   sub->add_option("--still", args->still_s, "Still time before and after the motion (s)");

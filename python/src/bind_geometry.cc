@@ -175,6 +175,26 @@ K x the undistorted bearing: where the guided matcher predicts and searches.)")
                   "TUM's default Kinect intrinsics (no distortion).")
       .def_static("tum_freiburg1", &PinholeCamera::TumFreiburg1,
                   "TUM fr1 intrinsics with their distortion.")
+      .def_static("tum_vi_cam0", &PinholeCamera::TumViCam0,
+                  "TUM-VI cam0 of the 512 x 512 recordings: an equidistant fisheye whose corners "
+                  "lie beyond the matcher's 80 deg field of view.")
+      .def("wider_than_field", &PinholeCamera::WiderThanField,
+           "Whether the image reaches beyond the matcher's field of view (80 deg off-axis): then "
+           "keypoints are detected and matched only within it (field_of_view_mask).")
+      .def(
+          "in_field",
+          [](const PinholeCamera& c, const Points& p) {
+            IMUMATCH_CHECK(p.ndim() == 2 && p.shape(1) == 2, "in_field: expected an N x 2 array");
+            py::array_t<bool> out(p.shape(0));
+            auto o = out.mutable_unchecked<1>();
+            const auto in = p.unchecked<2>();
+            for (py::ssize_t i = 0; i < p.shape(0); ++i) {
+              o(i) = c.InField(Eigen::Vector2d(in(i, 0), in(i, 1)));
+            }
+            return out;
+          },
+          py::arg("uv"),
+          "N x 2 pixels -> N booleans: the pixel's ray is within 80 deg of the axis.")
       .def(
           "project",
           [](const PinholeCamera& c, const Points& p) {

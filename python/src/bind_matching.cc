@@ -15,6 +15,7 @@
 #include "imumatch/eval/evaluation.h"  // PadBinaryDescriptors
 #include "imumatch/features/feature_factory.h"
 #include "imumatch/matching/baseline_matchers.h"
+#include "imumatch/matching/field_of_view.h"
 #include "imumatch/matching/guided_matcher.h"
 #include "imumatch/matching/guided_pipeline.h"
 #include "imumatch/matching/predictor.h"
@@ -152,8 +153,10 @@ void BindMatching(py::module_& m) {
   m.def(
       "extract_features",
       [](const py::handle& image, const std::string& detector, int max_keypoints,
-         const FeatureOptions* options) {
+         const FeatureOptions* options, const py::handle& mask) {
         MatView view = ArrayToMat(image, "image");
+        MatView mask_view;
+        if (!mask.is_none()) mask_view = ArrayToMat(mask, "mask");
         if (view.mat.empty()) throw InvalidArgument("extract_features: empty image");
         if (view.mat.depth() != CV_8U) {
           throw InvalidArgument("extract_features: expected a uint8 image (gray or BGR)");
@@ -166,16 +169,27 @@ void BindMatching(py::module_& m) {
         Features f;
         {
           py::gil_scoped_release release;
-          f = ExtractFeatures(view.mat, o);
+          f = ExtractFeatures(view.mat, o, mask_view.mat);
         }
         return py::make_tuple(KeypointsToArray(f.keypoints), MatToArray(f.descriptors));
       },
       py::arg("image"), py::arg("detector") = "orb", py::arg("max_keypoints") = 1000,
-      py::arg("options") = nullptr,
+      py::arg("options") = nullptr, py::arg("mask") = py::none(),
       R"(Detects and describes keypoints. Returns (keypoints, descriptors): an N x 7 float64 array
 (x, y, size, angle, response, octave, class_id; convert with imumatch.to_cv2_keypoints) and an
 N x D array (uint8 for binary descriptors, float32 for SIFT and SURF). ``options`` (a
-FeatureOptions) overrides detector and max_keypoints.)");
+FeatureOptions) overrides detector and max_keypoints. ``mask``: None, or a uint8 array of the
+image's size; keypoints are detected only where it is non-zero (field_of_view_mask(camera) for a
+fisheye wider than the matcher's field of view).)");
+  m.def(
+      "field_of_view_mask",
+      [](const PinholeCamera& camera) {
+        const cv::Mat mask = FieldOfViewMask(camera);
+        return mask.empty() ? py::object(py::none()) : py::object(MatToArray(mask));
+      },
+      py::arg("camera"),
+      "The detection mask of the camera's field of view: a uint8 array (255 within 80 deg of the "
+      "optical axis, 0 beyond), or None for a camera whose whole image is in the field.");
 
   // ---------------------------------------------------------------------------- prediction
   py::enum_<WindowMode>(m, "WindowMode")

@@ -179,3 +179,43 @@ def test_segments_near_end_from_the_scene_without_depth():
         correct.append(int(np.sum(err < 3.0)))
     assert correct[0] >= 0.98 * correct[1]
     assert correct[0] > 200
+
+
+def test_a_fisheye_is_detected_and_matched_within_its_field_of_view():
+    # TUM-VI's lens reaches 108 deg at the corners; the matcher's field ends at 80 deg. Which
+    # pixels lie within it is checked against OpenCV's own fisheye model (cv2.fisheye, an
+    # independent inverse of the equidistant lens).
+    cam = imumatch.PinholeCamera.tum_vi_cam0()
+    assert cam.wider_than_field()
+    assert not imumatch.PinholeCamera.euroc_cam0().wider_than_field()
+    assert imumatch.field_of_view_mask(imumatch.PinholeCamera.euroc_cam0()) is None
+    mask = imumatch.field_of_view_mask(cam)
+    assert mask.shape == (512, 512) and mask.dtype == np.uint8
+    rng = np.random.default_rng(5)
+    uv = rng.uniform(-0.5, 511.5, size=(4000, 2))
+    distorted = np.hypot((uv[:, 0] - cam.cx) / cam.fx, (uv[:, 1] - cam.cy) / cam.fy)
+    uv = uv[distorted < 1.5]  # below 86 deg: cv2.fisheye folds rays beyond 90 deg back
+    dist = np.array(cam.distortion[:4])
+    xy = cv2.fisheye.undistortPoints(uv.reshape(-1, 1, 2), cam.K, dist).reshape(-1, 2)
+    theta = np.degrees(np.arctan(np.linalg.norm(xy, axis=1)))
+    inside = cam.in_field(uv)
+    clear = np.abs(theta - 80.0) > 0.01
+    assert clear.sum() > 3000 and 100 < (~inside).sum()
+    np.testing.assert_array_equal(inside[clear], theta[clear] <= 80.0)
+    pixels = np.floor(uv + 0.5).astype(int)
+    np.testing.assert_array_equal(mask[pixels[:, 1], pixels[:, 0]] == 255,
+                                  cam.in_field(pixels.astype(np.float64)))
+    # A frame rendered through the lens: detected within the field only (to the pixel the mask is
+    # read at; ORB's coarser levels read it at their own pixels), the cap kept.
+    seq = imumatch.make_synthetic_sequence("walk", frame_times_s=[1.0], camera=cam)
+    gray = cv2.cvtColor(seq.frames[0].rgb, cv2.COLOR_BGR2GRAY)
+    vs, us = np.nonzero(mask)
+    edge_px = np.hypot((us - cam.cx) / cam.fx, (vs - cam.cy) / cam.fy).max() * cam.fx
+    for detector in ("orb", "sift"):
+        kp, desc = imumatch.extract_features(gray, detector, 500, mask=mask)
+        assert len(kp) == 500 and desc.shape[0] == 500
+        r_px = np.hypot((kp[:, 0] - cam.cx) / cam.fx, (kp[:, 1] - cam.cy) / cam.fy) * cam.fx
+        assert r_px.max() < edge_px + 4.0
+        assert cam.in_field(kp[:, :2]).mean() > 0.98
+    with pytest.raises(ValueError):
+        imumatch.extract_features(gray, "orb", 500, mask=mask[:100])

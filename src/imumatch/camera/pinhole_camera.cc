@@ -10,6 +10,7 @@
 #include <Eigen/LU>
 
 #include "imumatch/core/error.h"
+#include "imumatch/core/so3.h"
 
 namespace imumatch {
 
@@ -29,8 +30,6 @@ std::optional<DistortionModel> DistortionModelFromName(const std::string& name) 
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 // The equidistant (Kannala-Brandt) radius on the z=1 plane at ray angle theta, and its derivative.
 double KbRadius(const std::array<double, 5>& k, double theta, double* derivative) {
   const double t2 = theta * theta;
@@ -48,9 +47,15 @@ double KbRadius(const std::array<double, 5>& k, double theta, double* derivative
 // on the way).
 double KbAngle(const std::array<double, 5>& k, double radius) {
   if (!(radius >= 0.0)) return std::numeric_limits<double>::quiet_NaN();
-  double lo = 0.0, hi = 0.5 * kPi;
-  if (!(KbRadius(k, hi, nullptr) > radius)) return std::numeric_limits<double>::quiet_NaN();
-  double theta = std::min(radius, 0.5 * (lo + hi));
+  // Within the field of view the map increases (PinholeCamera::Check); beyond it, up to 90 deg,
+  // it may not, and a root there is only one of the rays that share the point.
+  const double field = PinholeCamera::kMaxFieldAngleDeg * kPi / 180.0;
+  const bool in_field = radius <= KbRadius(k, field, nullptr);
+  double lo = in_field ? 0.0 : field, hi = in_field ? field : 0.5 * kPi;
+  if (!in_field && !(KbRadius(k, hi, nullptr) > radius)) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  double theta = std::clamp(radius, lo, 0.5 * (lo + hi));
   for (int it = 0; it < 60; ++it) {
     double slope = 0.0;
     const double f = KbRadius(k, theta, &slope) - radius;
@@ -92,12 +97,12 @@ void PinholeCamera::Check() const {
       corner = std::max(corner, std::hypot((u - cx) / fx, (v - cy) / fy));
     }
   }
-  const double max_theta = kMaxEquidistantAngleDeg * kPi / 180.0;
+  const double max_theta = kMaxFieldAngleDeg * kPi / 180.0;
   // theta (1 + ...) must increase from 0 to the corner's angle (else two rays share an image
-  // point): checked every 0.5 deg, and the corner must be reached before max_theta.
-  for (double theta = 0.0; theta <= max_theta; theta += 0.5 * kPi / 180.0) {
+  // point), checked every 0.5 deg; beyond the field of view the image is not used.
+  for (double theta = 0.0; theta <= max_theta + 1e-12; theta += 0.5 * kPi / 180.0) {
     double slope = 0.0;
-    const double radius = KbRadius(distortion, theta, &slope);
+    const double radius = KbRadius(distortion, std::min(theta, max_theta), &slope);
     if (!(slope > 0.0)) {
       std::ostringstream m;
       m << "equidistant lens k=[" << distortion[0] << " " << distortion[1] << " " << distortion[2]
@@ -107,11 +112,29 @@ void PinholeCamera::Check() const {
     }
     if (radius >= corner) return;
   }
-  std::ostringstream m;
-  m << "equidistant lens: the image corners lie more than " << kMaxEquidistantAngleDeg
-    << " deg from the optical axis; the matcher works on a pinhole image of the undistorted rays, "
-       "which cannot hold them (a fisheye this wide is not supported)";
-  throw InvalidArgument(m.str());
+}
+
+namespace {
+// The radius on the normalised image plane at the field's edge (kMaxFieldAngleDeg).
+double FieldRadius(const PinholeCamera& c) {
+  return KbRadius(c.distortion, PinholeCamera::kMaxFieldAngleDeg * kPi / 180.0, nullptr);
+}
+}  // namespace
+
+bool PinholeCamera::WiderThanField() const {
+  if (model != DistortionModel::kEquidistant) return false;
+  const double field = FieldRadius(*this);
+  for (const double u : {-0.5, width - 0.5}) {
+    for (const double v : {-0.5, height - 0.5}) {
+      if (std::hypot((u - cx) / fx, (v - cy) / fy) > field) return true;
+    }
+  }
+  return false;
+}
+
+bool PinholeCamera::InField(const Eigen::Vector2d& uv) const {
+  if (model != DistortionModel::kEquidistant) return true;
+  return IdealToNormalized(uv).norm() <= FieldRadius(*this);
 }
 
 bool PinholeCamera::HasDistortion() const {
@@ -222,8 +245,17 @@ void PinholeCamera::IdealImageBounds(double step_px, Eigen::Vector2d* min_xy,
   }
   *min_xy = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
   *max_xy = -*min_xy;
+  const bool wide = WiderThanField();
+  const double field_radius = wide ? FieldRadius(*this) : 0.0;
+  const double field_tan = std::tan(kMaxFieldAngleDeg * kPi / 180.0);
   auto extend = [&](double u, double v) {
-    const Eigen::Vector2d p = PixelToIdeal(Eigen::Vector2d(u, v));
+    Eigen::Vector2d p;
+    const Eigen::Vector2d distorted = IdealToNormalized(Eigen::Vector2d(u, v));
+    if (wide && distorted.norm() > field_radius) {
+      p = NormalizedToIdeal(distorted.normalized() * field_tan);  // the field's edge on this ray
+    } else {
+      p = PixelToIdeal(Eigen::Vector2d(u, v));
+    }
     *min_xy = min_xy->cwiseMin(p);
     *max_xy = max_xy->cwiseMax(p);
   };
@@ -249,6 +281,20 @@ PinholeCamera PinholeCamera::EurocCam0() {
   c.cx = 367.215;
   c.cy = 248.375;
   c.distortion = {-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05, 0.0};
+  return c;
+}
+
+PinholeCamera PinholeCamera::TumViCam0() {
+  PinholeCamera c;
+  c.width = 512;
+  c.height = 512;
+  c.fx = 190.97847715128717;
+  c.fy = 190.9733070521226;
+  c.cx = 254.93170605935475;
+  c.cy = 256.8974428996504;
+  c.model = DistortionModel::kEquidistant;
+  c.distortion = {0.0034823894022493434, 0.0007150348452162257, -0.0020532361418706202,
+                  0.00020293673591811182, 0.0};
   return c;
 }
 

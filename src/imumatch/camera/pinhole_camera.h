@@ -64,11 +64,13 @@ struct PinholeCamera {
   // tan theta), also with all coefficients zero.
   DistortionModel model = DistortionModel::kRadialTangential;
   std::array<double, 5> distortion = {0, 0, 0, 0, 0};
-  // The largest angle from the optical axis (degrees) an equidistant camera's image may reach:
-  // the matcher works in "ideal" pixels (a pinhole image, straight epipolar lines), which reach
-  // infinity at 90 deg; at 80 deg they are 5.7 focal lengths from the centre. A wider lens
-  // (most fisheyes of 180 deg and more) is refused by Check().
-  static constexpr double kMaxEquidistantAngleDeg = 80.0;
+  // The matcher's field of view: rays up to this angle (degrees) from the optical axis. The
+  // matcher works in "ideal" pixels (a pinhole image, straight epipolar lines), which reach
+  // infinity at 90 deg; at 80 deg they are 5.7 focal lengths from the centre. An equidistant lens
+  // whose image reaches further (a fisheye such as TUM-VI's or a T265's, 180 deg and more across
+  // the diagonal) is accepted: the part of its image beyond the field (FieldMask in features,
+  // InField here) is left out of detection and matching, as such images' dark corners usually are.
+  static constexpr double kMaxFieldAngleDeg = 80.0;
   // Raw depth units per metre: TUM and Kinect PNGs store 5000 per metre (value / 5000 = metres).
   double depth_scale = 5000.0;
 
@@ -76,11 +78,16 @@ struct PinholeCamera {
   static constexpr int kMaxSide = 32768;
 
   // Throws InvalidArgument for a non-positive size, focal length or depth scale, non-finite
-  // values, or an equidistant lens whose image corners lie beyond kMaxEquidistantAngleDeg from
-  // the axis (or whose angle-to-radius map is not increasing up to them).
+  // values, or an equidistant lens whose angle-to-radius map stops increasing before the image
+  // corners or kMaxFieldAngleDeg, whichever comes first (two rays would share an image point).
   void Check() const;
 
   bool HasDistortion() const;
+  // True for an equidistant lens whose image corners lie beyond kMaxFieldAngleDeg.
+  bool WiderThanField() const;
+  // True when pixel uv's ray lies within kMaxFieldAngleDeg of the optical axis: always for a
+  // camera not WiderThanField.
+  bool InField(const Eigen::Vector2d& uv) const;
   // Same size, intrinsics and lens (model and coefficients): pixels map to the same rays. The
   // depth scale is not compared. For caches of per-camera tables.
   bool SameImageGeometry(const PinholeCamera& other) const {
@@ -128,7 +135,8 @@ struct PinholeCamera {
   }
   // The axis-aligned box in ideal pixels that holds the image [-0.5, w-0.5) x [-0.5, h-0.5): the
   // border mapped to ideal pixels every step_px (a barrel lens reaches further out at the
-  // corners than at the edge midpoints). min_xy / max_xy receive the corners.
+  // corners than at the edge midpoints), its points beyond the field of view moved in along
+  // their ray from the centre to the field's edge. min_xy / max_xy receive the corners.
   void IdealImageBounds(double step_px, Eigen::Vector2d* min_xy, Eigen::Vector2d* max_xy) const;
   // d ideal / d image pixel at the ideal pixel `ideal`: K J^-1 K^-1 with J the distortion's
   // Jacobian. It maps image-pixel noise (keypoint localisation) into ideal pixels.
@@ -147,6 +155,10 @@ struct PinholeCamera {
   // (fx=517.3 fy=516.5 cx=318.6 cy=255.3, d = 0.2624 -0.9531 -0.0054 0.0026 1.1633).
   static PinholeCamera KinectDefault();
   static PinholeCamera TumFreiburg1();
+  // TUM-VI cam0 of the 512x512 recordings (Kalibr equidistant: fx=190.978 fy=190.973 cx=254.932
+  // cy=256.897, k = 0.0034824 0.00071503 -0.0020532 0.00020294): a fisheye whose image corners lie
+  // about 108 deg off-axis, WiderThanField.
+  static PinholeCamera TumViCam0();
 
   // The same camera for an image resized to width x (height * width / this->width), rounded:
   // focal lengths scale by s = new_width / width and the principal point keeps its place under the

@@ -7,6 +7,7 @@
 
 #include "imumatch/camera/camera_test_util.h"
 #include "imumatch/core/error.h"
+#include "imumatch/core/so3.h"
 
 namespace imumatch {
 namespace {
@@ -135,19 +136,42 @@ TEST(PinholeCamera, EquidistantRoundTrip) {
   EXPECT_LT((cam.Unproject(*uv, 1.5) - p).norm(), 1e-9);
 }
 
-TEST(PinholeCamera, EquidistantCheckRefusesWhatIdealPixelsCannotHold) {
+TEST(PinholeCamera, EquidistantCheckRefusesAFoldingLensAndBoundsAFisheyesField) {
   PinholeCamera cam = testing::EquidistantTestCamera();
   cam.distortion = {0, 0, 0, 0, 0};
   EXPECT_NO_THROW(cam.Check());
-  // A fisheye: corners sqrt(376^2 + 240^2) / 150 = 2.97 rad (170 deg) from the axis.
+  EXPECT_FALSE(cam.WiderThanField());
+  // A fisheye: corners sqrt(376^2 + 240^2) / 150 = 2.97 rad (170 deg) from the axis. Accepted;
+  // its field of view ends at 80 deg, radius 80 pi / 180 = 1.396 (x 150 px) from the centre.
   PinholeCamera wide = cam;
   wide.fx = wide.fy = 150.0;
-  EXPECT_THROW(wide.Check(), InvalidArgument);
+  EXPECT_NO_THROW(wide.Check());
+  EXPECT_TRUE(wide.WiderThanField());
+  const double edge_px = 150.0 * 80.0 * kDegToRad;
+  EXPECT_TRUE(wide.InField(Eigen::Vector2d(370.0, 245.0)));
+  EXPECT_TRUE(wide.InField(Eigen::Vector2d(370.0 + edge_px * 0.999, 245.0)));
+  EXPECT_FALSE(wide.InField(Eigen::Vector2d(370.0 + edge_px * 1.001, 245.0)));
+  EXPECT_TRUE(wide.InField(Eigen::Vector2d(370.0, 245.0 - edge_px * 0.999)));
+  EXPECT_FALSE(wide.InField(Eigen::Vector2d(-0.5, -0.5)));
+  EXPECT_TRUE(cam.InField(Eigen::Vector2d(-0.5, -0.5)));
   // k1 = -0.5: theta - 0.5 theta^3 stops growing at theta = 47 deg (radius 0.54), short of the
-  // corners' radius 1.18.
+  // corners' radius 1.18; and for the fisheye, short of the field's edge.
   PinholeCamera folding = cam;
   folding.distortion = {-0.5, 0.0, 0.0, 0.0, 0.0};
   EXPECT_THROW(folding.Check(), InvalidArgument);
+  folding.fx = folding.fy = 150.0;
+  EXPECT_THROW(folding.Check(), InvalidArgument);
+  // k1 = -0.1515: theta (1 + k1 theta^2) grows up to 85 deg and folds back beyond: accepted, as
+  // the field ends at 80 deg, where the radius (0.9839) is already above the one at 90 deg
+  // (0.9836). A ray at 79 deg (radius 0.9817, below both) must come back from its pixel as
+  // itself, not as its fold beyond 80 deg.
+  PinholeCamera folds_beyond = wide;
+  folds_beyond.distortion = {-0.1515, 0.0, 0.0, 0.0, 0.0};
+  EXPECT_NO_THROW(folds_beyond.Check());
+  const double theta = 79.0 * kDegToRad;
+  const Eigen::Vector2d ray = std::tan(theta) * Eigen::Vector2d(0.6, 0.8);
+  const Eigen::Vector2d back = folds_beyond.PixelToNormalized(folds_beyond.NormalizedToPixel(ray));
+  EXPECT_NEAR((back - ray).norm() / ray.norm(), 0.0, 1e-9) << back.transpose();
   // Four coefficients only.
   PinholeCamera five = cam;
   five.distortion = {0.0, 0.0, 0.0, 0.0, 0.01};
@@ -189,13 +213,16 @@ TEST(PinholeCamera, ParsesTextIntrinsics) {
       DistortionModel::kEquidistant);
   EXPECT_EQ(ParseCameraFromText("plumb_bob 380 380 370 245 752 480 -0.2", "x").model,
             DistortionModel::kRadialTangential);
-  // A fisheye the matcher cannot hold: the error names the line.
+  // A fisheye is read (its field of view ends at 80 deg); a lens that folds back before it
+  // cannot be used: the error names the line.
+  EXPECT_TRUE(
+      ParseCameraFromText("equidistant 150 150 370 245 752 480 0 0 0 0", "x").WiderThanField());
   try {
-    ParseCameraFromText("\nequidistant 150 150 370 245 752 480 0 0 0 0", "cam.txt");
+    ParseCameraFromText("\nequidistant 150 150 370 245 752 480 -0.5 0 0 0", "cam.txt");
     FAIL() << "expected InputError";
   } catch (const InputError& err) {
     EXPECT_EQ(err.line(), 2);
-    EXPECT_NE(std::string(err.what()).find("80 deg"), std::string::npos) << err.what();
+    EXPECT_NE(std::string(err.what()).find("stops growing"), std::string::npos) << err.what();
   }
 }
 

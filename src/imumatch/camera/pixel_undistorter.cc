@@ -6,6 +6,7 @@
 #include <Eigen/LU>
 
 #include "imumatch/core/error.h"
+#include "imumatch/core/so3.h"
 
 namespace imumatch {
 
@@ -32,13 +33,18 @@ PixelUndistorter::PixelUndistorter(const PinholeCamera& camera, double cell_px) 
     // g(rho) = tan(theta) / rho and g'(rho) = (rho sec^2(theta) / radius'(theta) - tan(theta)) /
     // rho^2 up to the table's farthest node (the image corners plus a cell), 4096 steps: the
     // cubic Hermite interpolation's error (h^4 / 384 times g's fourth derivative) is far below a
-    // float's rounding.
+    // float's rounding. A lens wider than the field of view: up to the field's edge (the image
+    // beyond it is not matched; points there take ToIdeal).
     double max_rho = 0.0;
     for (const double u : {origin_, origin_ + (cols_ - 1) * cell_}) {
       for (const double v : {origin_, origin_ + (rows_ - 1) * cell_}) {
         max_rho =
             std::max(max_rho, std::hypot((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy));
       }
+    }
+    if (camera.WiderThanField()) {
+      max_rho =
+          std::min(max_rho, camera.EquidistantRadius(PinholeCamera::kMaxFieldAngleDeg * kDegToRad));
     }
     constexpr int kSteps = 4096;
     radial_step_ = max_rho / kSteps;
@@ -104,6 +110,8 @@ Eigen::Vector2d PixelUndistorter::ToIdeal(const Eigen::Vector2d& uv,
   if (gx >= 0.0 && gy >= 0.0 && gx < cols_ - 1 && gy < rows_ - 1) {
     static_assert(sizeof(Eigen::Vector2d) == 2 * sizeof(double));
     TableStart(reinterpret_cast<const double*>(table_.data()), cols_, gx, gy, &xy.x(), &xy.y());
+    // A lens wider than the field: nodes at 90 deg and beyond have no bearing.
+    if (!xy.allFinite()) xy = camera_.PixelToNormalized(uv);
   } else {
     xy = camera_.PixelToNormalized(uv);  // outside the table (or NaN): the iterative inverse
   }

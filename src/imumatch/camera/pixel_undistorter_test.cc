@@ -8,6 +8,7 @@
 #include <Eigen/LU>
 
 #include "imumatch/camera/camera_test_util.h"
+#include "imumatch/core/so3.h"
 
 namespace imumatch {
 namespace {
@@ -118,6 +119,58 @@ TEST(PixelUndistorter, InPlaceBatchEqualsToIdealOnEveryPath) {
   identity.ToIdealInPlace(xy, 1, 2);
   EXPECT_EQ(xy[0], 12.25f);
   EXPECT_EQ(xy[1], 400.5f);
+}
+
+TEST(PixelUndistorter, AFisheyeWiderThanTheFieldMapsEveryPixelInsideIt) {
+  // TUM-VI's lens: the corners lie 108 deg off-axis, the field of view ends at 80 deg.
+  const PinholeCamera cam = PinholeCamera::TumViCam0();
+  ASSERT_TRUE(cam.WiderThanField());
+  const PixelUndistorter undistorter(cam);
+  const double field_tan = std::tan(PinholeCamera::kMaxFieldAngleDeg * kDegToRad);
+  std::vector<Eigen::Vector2f> in_field;
+  int outside = 0;
+  for (float v = -0.5f; v < cam.height; v += 3.1f) {
+    for (float u = -0.5f; u < cam.width; u += 2.9f) {
+      const Eigen::Vector2d uv(u, v);
+      if (!cam.InField(uv)) {
+        ++outside;
+        continue;
+      }
+      in_field.emplace_back(u, v);
+      const Eigen::Vector2d ideal = undistorter.ToIdeal(uv);
+      // The independent truth: the forward model maps it back; the ray is within 80 deg.
+      ASSERT_LT((cam.IdealToPixel(ideal) - uv).norm(), 1e-5) << uv.transpose();
+      const Eigen::Vector2d xy = cam.IdealToNormalized(ideal);
+      ASSERT_LE(xy.norm(), field_tan * (1.0 + 1e-9)) << uv.transpose();
+      // Inside the bounds the matcher's grid and noise table cover.
+      ASSERT_GE(ideal.x(), undistorter.ideal_min_x() - 1e-6);
+      ASSERT_LE(ideal.x(), undistorter.ideal_max_x() + 1e-6);
+      ASSERT_GE(ideal.y(), undistorter.ideal_min_y() - 1e-6);
+      ASSERT_LE(ideal.y(), undistorter.ideal_max_y() + 1e-6);
+    }
+  }
+  EXPECT_GT(outside, 1000);  // the four corners
+  // The bounds are the field's, not infinite: within 5.67 focal lengths (tan 80 deg) of the
+  // centre, and beyond 5.2 (where the field's circle crosses the image's edges, 16 deg off the
+  // axes: 5.67 cos 16 deg = 5.45).
+  for (const double reach : {undistorter.ideal_max_x() - cam.cx, cam.cx - undistorter.ideal_min_x(),
+                             (undistorter.ideal_max_y() - cam.cy) * cam.fx / cam.fy,
+                             (cam.cy - undistorter.ideal_min_y()) * cam.fx / cam.fy}) {
+    EXPECT_LE(reach, field_tan * cam.fx + 1e-6);
+    EXPECT_GT(reach, 5.2 * cam.fx);
+  }
+  // The batch equals the one-by-one map on every path, up to the field's edge.
+  for (const auto path : {PixelUndistorter::Path::kAuto, PixelUndistorter::Path::kPortable}) {
+    std::vector<float> xy;
+    for (const Eigen::Vector2f& p : in_field) xy.insert(xy.end(), {p.x(), p.y()});
+    undistorter.ToIdealInPlace(xy.data(), static_cast<int>(in_field.size()), 2, path);
+    for (size_t i = 0; i < in_field.size(); ++i) {
+      const Eigen::Vector2d want = undistorter.ToIdeal(in_field[i].cast<double>());
+      // Float rounding of positions up to about 1300 px from the centre.
+      ASSERT_LT((Eigen::Vector2d(xy[2 * i], xy[2 * i + 1]) - want).cwiseAbs().maxCoeff(), 3e-4)
+          << in_field[i].transpose();
+    }
+  }
 }
 
 TEST(PixelUndistorter, IsTheIdentityWithoutDistortion) {

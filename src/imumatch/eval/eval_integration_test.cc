@@ -160,6 +160,41 @@ TEST(EvalIntegrationTest, SyntheticThroughEurocsLensGuidedBeatsBruteForce) {
   }
 }
 
+// The walk through TUM-VI's fisheye (equidistant, 108 deg at the corners): the
+// matcher's field of view ends at 80 deg, the detectors see only the field (the renderer leaves
+// the rest black), and within it the guided matcher is judged against exact truth as above.
+TEST(EvalIntegrationTest, SyntheticThroughAFisheyeGuidedBeatsBruteForce) {
+  SyntheticSequenceOptions so;
+  so.motion = "walk";
+  so.camera = PinholeCamera::TumViCam0();
+  ASSERT_TRUE(so.camera.WiderThanField());
+  so.frame_times_s = {1.0, 1.05, 1.1, 1.15};
+  const EvalSource walk = MakeSyntheticSource(MakeSyntheticSequence(so), "walk_fisheye");
+  EvaluationOptions o;
+  o.detectors = {DetectorKind::kSift, DetectorKind::kOrb};
+  o.features.max_keypoints = 300;
+  o.methods = {MatchMethod::kBruteForce, MatchMethod::kGuided};
+  const EvaluationResult result = EvaluateSource(walk, {{0, 1}, {1, 2}, {2, 3}}, o);
+  ASSERT_TRUE(result.skipped.empty()) << result.skipped.front().reason;
+  ASSERT_EQ(result.records.size(), 6u);
+  for (const double threshold : {1.0, 1.5, 3.0, 8.0}) {
+    const auto rows = Summarize(result.records, threshold);
+    for (DetectorKind d : {DetectorKind::kSift, DetectorKind::kOrb}) {
+      SCOPED_TRACE(ToString(d) + " at " + std::to_string(threshold) + " px");
+      const MethodSummary& g = Row(rows, "walk_fisheye", d, MatchMethod::kGuided);
+      const MethodSummary& b = Row(rows, "walk_fisheye", d, MatchMethod::kBruteForce);
+      EXPECT_GT(g.matches, 100.0);
+      EXPECT_GE(g.correct, b.correct);
+      EXPECT_GE(g.precision, b.precision);
+      if (threshold == 1.5) {
+        EXPECT_GE(g.precision, 0.97);
+        EXPECT_GE(g.window_recall, 0.99);
+        EXPECT_GT(g.window_checked, 300);
+      }
+    }
+  }
+}
+
 // The end-to-end timing on a short stream: both imumatch schedules (frame by frame, overlapped)
 // match every pair with its own frames and depth, so they find nearly the same matches (the
 // frame-by-frame schedule splits ORB's pyramid levels over two tasks, whose deeper levels differ

@@ -22,6 +22,7 @@
 #include "imumatch/io/image_io.h"
 #include "imumatch/matching/baseline_matchers.h"
 #include "imumatch/matching/descriptor_distance.h"
+#include "imumatch/matching/field_of_view.h"
 #include "imumatch/matching/klt_tracker.h"
 #include "imumatch/matching/scene_depth.h"
 
@@ -215,6 +216,7 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
   EvaluationOptions run_options = options;
   run_options.refit.measure_rotation = learn_bias;
   const PixelUndistorter undistorter(dataset.camera);
+  const cv::Mat field_mask = FieldOfViewMask(dataset.camera);  // empty but for a wide fisheye
   const auto wall0 = Clock::now();
   std::vector<CachedFeatures> cache;  // features of the previous pair's frame B
 
@@ -270,7 +272,7 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
         c.frame = frame;
         c.kind = kind;
         const auto t0 = Clock::now();
-        c.features = ExtractFeatures(image, fopts);
+        c.features = ExtractFeatures(image, fopts, field_mask);
         c.features.descriptors = PadBinaryDescriptors(c.features.descriptors);
         c.ms = MsSince(t0);
         const auto t1 = Clock::now();

@@ -154,17 +154,28 @@ cv::Ptr<cv::Feature2D> CreateFeature2D(const FeatureOptions& options) {
   throw InvalidArgument("invalid DetectorKind");
 }
 
-Features ExtractFeatures(const cv::Mat& image, const FeatureOptions& options) {
+Features ExtractFeatures(const cv::Mat& image, const FeatureOptions& options, const cv::Mat& mask) {
   options.Check();
   const cv::Mat gray = ToGray8(image, "ExtractFeatures");
+  IMUMATCH_CHECK(mask.empty() || (mask.type() == CV_8UC1 && mask.size() == gray.size()),
+                 "ExtractFeatures: the mask must be empty or 8-bit single-channel of the image's "
+                 "size ("
+                     << gray.cols << "x" << gray.rows << "), not " << mask.cols << "x" << mask.rows
+                     << " of type " << mask.type());
   cv::Ptr<cv::Feature2D> feature2d = CreateFeature2D(options);
   Features out;
   std::vector<cv::KeyPoint> keypoints;
   cv::Mat descriptors;
   try {
-    if (options.kind == DetectorKind::kAkaze || options.kind == DetectorKind::kBrisk) {
-      // No built-in cap: keep the strongest detections, then describe only those.
-      feature2d->detect(gray, keypoints);
+    if (options.kind == DetectorKind::kAkaze || options.kind == DetectorKind::kBrisk ||
+        (options.kind == DetectorKind::kSift && !mask.empty())) {
+      // No built-in cap: keep the strongest detections, then describe only those. (cv::SIFT
+      // caps before it applies a mask: with one, it detects without its cap.)
+      if (options.kind == DetectorKind::kSift) {
+        feature2d =
+            cv::SIFT::create(0, 3, options.sift_contrast_threshold, options.sift_edge_threshold);
+      }
+      feature2d->detect(gray, keypoints, mask);
       std::stable_sort(keypoints.begin(), keypoints.end(), ResponseGreater);
       if (static_cast<int>(keypoints.size()) > options.max_keypoints) {
         keypoints.resize(options.max_keypoints);
@@ -172,9 +183,9 @@ Features ExtractFeatures(const cv::Mat& image, const FeatureOptions& options) {
       feature2d->compute(gray, keypoints, descriptors);
     } else if (options.kind == DetectorKind::kOrb && options.threads >= 2 &&
                options.orb_n_levels >= 2) {
-      DetectAndComputeOrbSplit(gray, ToOrbSplitParams(options), &keypoints, &descriptors);
+      DetectAndComputeOrbSplit(gray, ToOrbSplitParams(options), &keypoints, &descriptors, mask);
     } else {
-      feature2d->detectAndCompute(gray, cv::noArray(), keypoints, descriptors);
+      feature2d->detectAndCompute(gray, mask, keypoints, descriptors);
     }
   } catch (const cv::Exception& e) {
     // OpenCV's detectors assert on some inputs (e.g. images smaller than their pyramid needs).

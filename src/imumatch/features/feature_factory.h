@@ -70,7 +70,10 @@ struct Features {
 // options.max_keypoints features sorted by decreasing response, for every kind. Throws
 // InvalidArgument for an empty image, another pixel type, options failing Check(), or when an
 // OpenCV detector rejects the image (cv::Exception is translated, e.g. for tiny images).
-Features ExtractFeatures(const cv::Mat& image, const FeatureOptions& options);
+// mask: empty, or 8-bit single-channel of the image's size; keypoints are detected only where it
+// is non-zero (e.g. a fisheye's field of view), every kind keeping up to max_keypoints there.
+Features ExtractFeatures(const cv::Mat& image, const FeatureOptions& options,
+                         const cv::Mat& mask = cv::Mat());
 
 // The ORB settings of options as DetectAndComputeOrbSplit / DetectAndComputeOrbPart take them.
 OrbSplitParams ToOrbSplitParams(const FeatureOptions& options);

@@ -1,5 +1,6 @@
 #include "imumatch/features/feature_factory.h"
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -121,6 +122,40 @@ TEST(ExtractFeaturesTest, EveryKindCapsSortsAndDescribes) {
       EXPECT_TRUE(kp.pt.x >= 0.f && kp.pt.x < 640.f && kp.pt.y >= 0.f && kp.pt.y < 480.f);
     }
   }
+}
+
+TEST(ExtractFeaturesTest, EveryKindDetectsOnlyInsideTheMaskAndKeepsItsCap) {
+  // A disc of radius 200 px about the centre (as a fisheye's field of view), for every kind and
+  // ORB split over two tasks too: every keypoint inside (to the pixel the mask is read at), and
+  // still the cap, taken from inside.
+  cv::Mat mask = cv::Mat::zeros(480, 640, CV_8U);
+  cv::circle(mask, cv::Point(320, 240), 200, cv::Scalar(255), cv::FILLED);
+  std::vector<FeatureOptions> all;
+  for (const DetectorKind kind : kAllKinds) {
+    all.emplace_back();
+    all.back().kind = kind;
+  }
+  all.push_back(all[2]);
+  ASSERT_EQ(all.back().kind, DetectorKind::kOrb);
+  all.back().threads = 2;
+  for (FeatureOptions& options : all) {
+    SCOPED_TRACE(ToString(options.kind) + " threads " + std::to_string(options.threads));
+    options.max_keypoints = 150;
+    const Features f = ExtractFeatures(TumColorImage(), options, mask);
+    EXPECT_EQ(f.keypoints.size(), 150u);
+    ASSERT_EQ(f.descriptors.rows, static_cast<int>(f.keypoints.size()));
+    for (const cv::KeyPoint& kp : f.keypoints) {
+      // cv::KeyPointsFilter::runByPixelsMask reads the mask at the rounded-down position; the
+      // deeper ORB levels at their own (coarser) pixels: within a level's pixel of the disc.
+      EXPECT_LT(std::hypot(kp.pt.x - 320.0, kp.pt.y - 240.0), 200.0 + 4.0) << kp.pt;
+    }
+  }
+  // A mask of another size or type is refused.
+  FeatureOptions options;
+  EXPECT_THROW(ExtractFeatures(TumColorImage(), options, cv::Mat::zeros(240, 320, CV_8U)),
+               InvalidArgument);
+  EXPECT_THROW(ExtractFeatures(TumColorImage(), options, cv::Mat::zeros(480, 640, CV_32F)),
+               InvalidArgument);
 }
 
 TEST(ExtractFeaturesTest, GrayAndBgrGiveTheSameFeatures) {

@@ -32,12 +32,15 @@ int OrbSplitLevel(float scale_factor, int n_levels) {
 }
 
 void DetectAndComputeOrbPart(const cv::Mat& gray, const OrbSplitParams& params, int part,
-                             std::vector<cv::KeyPoint>* keypoints, cv::Mat* descriptors) {
+                             std::vector<cv::KeyPoint>* keypoints, cv::Mat* descriptors,
+                             const cv::Mat& mask) {
   IMUMATCH_CHECK(!gray.empty() && gray.type() == CV_8UC1,
                  "DetectAndComputeOrbSplit needs a non-empty 8-bit gray image");
   IMUMATCH_CHECK(params.max_keypoints >= 1 && params.n_levels >= 1 && params.scale_factor > 1.0f,
                  "bad ORB parameters");
   IMUMATCH_CHECK(part == 0 || part == 1, "ORB part " << part);
+  IMUMATCH_CHECK(mask.empty() || (mask.type() == CV_8UC1 && mask.size() == gray.size()),
+                 "the ORB mask must be empty or 8-bit of the image's size");
   IMUMATCH_CHECK(params.split_level >= 0 && params.split_level <= params.n_levels,
                  "ORB split level " << params.split_level << " of " << params.n_levels);
   const int split = params.split_level > 0 ? params.split_level
@@ -53,12 +56,12 @@ void DetectAndComputeOrbPart(const cv::Mat& gray, const OrbSplitParams& params, 
   if (part == 0) {
     cv::Ptr<cv::ORB> orb = cv::ORB::create(n_low, params.scale_factor, split, 31, 0, 2,
                                            cv::ORB::HARRIS_SCORE, 31, params.fast_threshold);
-    orb->detectAndCompute(gray, cv::noArray(), *keypoints, *descriptors);
+    orb->detectAndCompute(gray, mask, *keypoints, *descriptors);
     return;
   }
   if (split >= params.n_levels) return;
   // Level `split` as cv::ORB builds it: each level resized from the previous one.
-  cv::Mat level = gray;
+  cv::Mat level = gray, level_mask;
   for (int l = 1; l <= split; ++l) {
     const double scale = std::pow(params.scale_factor, l);
     const cv::Size size(cvRound(gray.cols / scale), cvRound(gray.rows / scale));
@@ -68,7 +71,8 @@ void DetectAndComputeOrbPart(const cv::Mat& gray, const OrbSplitParams& params, 
   }
   cv::Ptr<cv::ORB> orb = cv::ORB::create(n_high, params.scale_factor, params.n_levels - split, 31,
                                          0, 2, cv::ORB::HARRIS_SCORE, 31, params.fast_threshold);
-  orb->detectAndCompute(level, cv::noArray(), *keypoints, *descriptors);
+  if (!mask.empty()) cv::resize(mask, level_mask, level.size(), 0, 0, cv::INTER_NEAREST);
+  orb->detectAndCompute(level, level_mask, *keypoints, *descriptors);
   const float scale = static_cast<float>(std::pow(params.scale_factor, split));
   for (cv::KeyPoint& k : *keypoints) {
     k.pt *= scale;
@@ -93,11 +97,13 @@ void MergeOrbSplitParts(std::vector<cv::KeyPoint> (&keypoints)[2], const cv::Mat
 }
 
 void DetectAndComputeOrbSplit(const cv::Mat& gray, const OrbSplitParams& params,
-                              std::vector<cv::KeyPoint>* keypoints, cv::Mat* descriptors) {
+                              std::vector<cv::KeyPoint>* keypoints, cv::Mat* descriptors,
+                              const cv::Mat& mask) {
   std::vector<cv::KeyPoint> kp[2];
   cv::Mat desc[2];
-  RunTasks(2,
-           [&](int part) { DetectAndComputeOrbPart(gray, params, part, &kp[part], &desc[part]); });
+  RunTasks(2, [&](int part) {
+    DetectAndComputeOrbPart(gray, params, part, &kp[part], &desc[part], mask);
+  });
   MergeOrbSplitParts(kp, desc, keypoints, descriptors);
 }
 

@@ -26,15 +26,18 @@ struct OrbSplitParams {
   int split_level = 0;
 };
 // gray: 8-bit single-channel, non-empty. Throws InvalidArgument otherwise, and cv::Exception where
-// cv::ORB does.
+// cv::ORB does. mask: as cv::ORB takes it (empty, or 8-bit of gray's size; the second part
+// resizes it to its first level, nearest neighbour).
 void DetectAndComputeOrbSplit(const cv::Mat& gray, const OrbSplitParams& params,
-                              std::vector<cv::KeyPoint>* keypoints, cv::Mat* descriptors);
+                              std::vector<cv::KeyPoint>* keypoints, cv::Mat* descriptors,
+                              const cv::Mat& mask = cv::Mat());
 
 // The two parts on their own, for callers that schedule them (e.g. next to other work): part 0
 // (levels below the split) or 1 (the others), as DetectAndComputeOrbSplit runs them; keypoints in
 // the full image's coordinates. MergeOrbSplitParts concatenates part 0 and part 1.
 void DetectAndComputeOrbPart(const cv::Mat& gray, const OrbSplitParams& params, int part,
-                             std::vector<cv::KeyPoint>* keypoints, cv::Mat* descriptors);
+                             std::vector<cv::KeyPoint>* keypoints, cv::Mat* descriptors,
+                             const cv::Mat& mask = cv::Mat());
 void MergeOrbSplitParts(std::vector<cv::KeyPoint> (&keypoints)[2], const cv::Mat (&descriptors)[2],
                         std::vector<cv::KeyPoint>* merged_keypoints, cv::Mat* merged_descriptors);
 

@@ -13,6 +13,7 @@
 #include "imumatch/imu/imu_integrator.h"
 #include "imumatch/matching/baseline_matchers.h"
 #include "imumatch/matching/descriptor_distance.h"
+#include "imumatch/matching/field_of_view.h"
 #include "imumatch/matching/scene_depth.h"
 
 namespace imumatch {
@@ -56,6 +57,7 @@ const char* ToString(FrameStatus status) {
 FrontEnd::FrontEnd(const PinholeCamera& camera, const ImuParams& imu_params,
                    const Rigid3d& cam_from_imu, const FrontEndOptions& options)
     : undistorter_(camera),
+      field_mask_(FieldOfViewMask(camera)),
       imu_params_(imu_params),
       cam_from_imu_(cam_from_imu),
       options_(options) {
@@ -221,7 +223,7 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
   IMUMATCH_CHECK(gray.type() == CV_8UC1, "image at t = " << frame.t_ns << " ns must be 8-bit");
 
   auto t0 = SteadyClock::now();
-  Features features = ExtractFeatures(gray, options_.features);
+  Features features = ExtractFeatures(gray, options_.features, field_mask_);
   features.descriptors = PadBinaryDescriptors(features.descriptors);
   const std::vector<KeypointInfo> ideal = ToIdealKeypointInfos(features.keypoints, undistorter_);
   result.extract_ms = MsSince(t0);

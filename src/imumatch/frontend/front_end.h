@@ -159,6 +159,7 @@ class FrontEnd {
                                int& from_tracks);
 
   PixelUndistorter undistorter_;
+  cv::Mat field_mask_;  // FieldOfViewMask: empty but for a fisheye wider than the field
   ImuParams imu_params_;
   Rigid3d cam_from_imu_;
   FrontEndOptions options_;

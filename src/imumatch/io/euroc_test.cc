@@ -296,10 +296,15 @@ TEST(Euroc, SensorYamlErrors) {
   ExpectInputError([&] { ReadEurocCameraSensor(equi5); }, equi5, 15, "");
   const std::string omni = dir.Write("b6.yaml", CameraYaml("1.0, 0.0, 0.0, 0.1", "omni"));
   ExpectInputError([&] { ReadEurocCameraSensor(omni); }, omni, 14, "not supported");
-  // A fisheye wider than ideal pixels hold (corners 2.7 rad from the axis at fx = 160).
+  // A fisheye (corners 2.7 rad from the axis at fx = 160) is read; one whose lens folds back
+  // (k1 = -0.5: at 47 deg) before its field's edge is refused.
   const std::string wide = dir.Write("b7.yaml", CameraYaml("1.0, 0.0, 0.0, 0.1", "equidistant",
                                                            "0, 0, 0, 0", "160, 160, 376, 240"));
-  ExpectInputError([&] { ReadEurocCameraSensor(wide); }, wide, 13, "80 deg");
+  EXPECT_TRUE(ReadEurocCameraSensor(wide).camera.WiderThanField());
+  const std::string folding = dir.Write(
+      "b8.yaml",
+      CameraYaml("1.0, 0.0, 0.0, 0.1", "equidistant", "-0.5, 0, 0, 0", "160, 160, 376, 240"));
+  ExpectInputError([&] { ReadEurocCameraSensor(folding); }, folding, 13, "stops growing");
   const std::string short_row = dir.Write("c.yaml", CameraYaml("1.0, 0.0, 0.0", "radtan"));
   ExpectInputError([&] { ReadEurocCameraSensor(short_row); }, short_row, 6,
                    "expected 16 numbers, got 15");

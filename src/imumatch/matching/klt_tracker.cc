@@ -337,6 +337,10 @@ TrackResult TrackSeeded(const TrackingPyramid& a, const TrackingPyramid& b,
       finish(status == AlignStatus::kBorder ? TrackOutcome::kBorder : TrackOutcome::kNoConvergence);
       continue;
     }
+    if (!undistorter.camera().InField(pos.cast<double>())) {  // beyond a fisheye's field of view
+      finish(TrackOutcome::kBorder);
+      continue;
+    }
     result.correlation[i] = c;
     if (!(c >= static_cast<float>(options.min_correlation))) {
       finish(TrackOutcome::kLowCorrelation);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <limits>
 
 #include "imumatch/core/error.h"
 #include "imumatch/core/so3.h"
@@ -461,6 +462,14 @@ void ToIdealKeypointInfos(const std::vector<cv::KeyPoint>& keypoints,
   if (!out->empty()) {
     undistorter.ToIdealInPlace(&out->front().x, static_cast<int>(out->size()),
                                static_cast<int>(sizeof(KeypointInfo) / sizeof(float)));
+  }
+  const PinholeCamera& camera = undistorter.camera();
+  if (!camera.WiderThanField()) return;
+  // A fisheye wider than the field of view: keypoints beyond it have no ideal position (NaN: no
+  // prediction, never in a window).
+  for (size_t i = 0; i < keypoints.size(); ++i) {
+    if (camera.InField(Eigen::Vector2d(keypoints[i].pt.x, keypoints[i].pt.y))) continue;
+    (*out)[i].x = (*out)[i].y = std::numeric_limits<float>::quiet_NaN();
   }
 }
 

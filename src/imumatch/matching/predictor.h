@@ -281,7 +281,9 @@ double KeypointSigmaScale(const PredictionOptions& options, const KeypointInfo& 
 double SizeSigmaFactor(float size, float reference_size, double base_sigma_px);
 
 // Keypoints in ideal pixels (PredictKeypoints and the guided matcher work in them): positions
-// mapped through the undistorter, angle, size and octave kept.
+// mapped through the undistorter, angle, size and octave kept. Through a fisheye wider than the
+// field of view (PinholeCamera::WiderThanField) a keypoint beyond it gets NaN: not predicted,
+// never a candidate (FieldOfViewMask keeps the detectors from finding such keypoints).
 std::vector<KeypointInfo> ToIdealKeypointInfos(const std::vector<cv::KeyPoint>& keypoints,
                                                const PixelUndistorter& undistorter);
 void ToIdealKeypointInfos(const std::vector<cv::KeyPoint>& keypoints,

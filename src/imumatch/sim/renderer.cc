@@ -233,6 +233,16 @@ LensRayMap::LensRayMap(const PinholeCamera& camera) : camera_(camera) {
     }
   }
   PixelUndistorter(camera).ToIdealInPlace(ideal_.data(), width * height, 2);
+  if (!camera.WiderThanField()) return;
+  // Beyond the field of view (PinholeCamera::InField) no ray: those pixels render black, without
+  // depth, like a fisheye's vignetted corners.
+  for (int v = 0; v < height; ++v) {
+    for (int u = 0; u < width; ++u) {
+      if (camera.InField(Eigen::Vector2d(u, v))) continue;
+      const size_t i = (static_cast<size_t>(v) * width + u) * 2;
+      ideal_[i] = ideal_[i + 1] = std::numeric_limits<float>::quiet_NaN();
+    }
+  }
 }
 
 RenderedView RenderView(const Scene& scene, const PinholeCamera& camera,
@@ -274,14 +284,22 @@ RenderedView RenderView(const Scene& scene, const PinholeCamera& camera,
       return Eigen::Vector2d(p[0], p[1]);
     };
     const Eigen::Vector2d p = at(u, v);
-    // One-pixel images have no neighbour: the lens's stretch is then taken as none.
-    const Eigen::Vector2d step_u = u + 1 < width ? at(u + 1, v) - p
-                                   : u > 0       ? p - at(u - 1, v)
-                                                 : Eigen::Vector2d(1.0, 0.0);
-    const Eigen::Vector2d step_v = v + 1 < height ? at(u, v + 1) - p
-                                   : v > 0        ? p - at(u, v - 1)
-                                                  : Eigen::Vector2d(0.0, 1.0);
-    return PixelRay{p.x(), p.y(), step_u, step_v};
+    // The step to the next pixel, else from the previous one (image border, field's edge); a
+    // one-pixel image (or a pixel alone in the field) has none: the lens's stretch is then taken
+    // as none.
+    const auto step = [&](int du, int dv, const Eigen::Vector2d& none) -> Eigen::Vector2d {
+      const int un = u + du, vn = v + dv, up = u - du, vp = v - dv;
+      if (un < width && vn < height) {
+        const Eigen::Vector2d d = at(un, vn) - p;
+        if (d.allFinite()) return d;
+      }
+      if (up >= 0 && vp >= 0) {
+        const Eigen::Vector2d d = p - at(up, vp);
+        if (d.allFinite()) return d;
+      }
+      return none;
+    };
+    return PixelRay{p.x(), p.y(), step(1, 0, {1.0, 0.0}), step(0, 1, {0.0, 1.0})};
   };
 
   ParallelRows(height, options.num_threads, [&](int v) {
@@ -294,6 +312,12 @@ RenderedView RenderView(const Scene& scene, const PinholeCamera& camera,
     for (int u = 0; u < width; ++u) {
       float colour[3];
       const PixelRay ray = ray_of(u, v);
+      if (!std::isfinite(ray.u)) {  // beyond the field of view (LensRayMap)
+        rgb[u] = cv::Vec3b(0, 0, 0);
+        depth[u] = 0;
+        ids[u] = -2;
+        continue;
+      }
       const FrameCaster::Hit hit = caster.Cast(ray.u, ray.v, ray.step_u, ray.step_v, colour);
       rgb[u] = ToPixel(colour);
       ids[u] = hit.surface;
@@ -324,7 +348,7 @@ RenderedView RenderView(const Scene& scene, const PinholeCamera& camera,
         const int id = ids[u];
         const bool edge = up[u] != id || down[u] != id || (u > 0 && ids[u - 1] != id) ||
                           (u + 1 < width && ids[u + 1] != id);
-        if (!edge) continue;
+        if (!edge || id == -2) continue;
         float sum[3] = {0.0f, 0.0f, 0.0f};
         const PixelRay ray = ray_of(u, v);
         const Eigen::Vector2d sub_u = ray.step_u / n, sub_v = ray.step_v / n;
