@@ -350,11 +350,14 @@ Dataset LoadEurocDataset(const std::string& path, const DatasetOptions& options)
   d.imu_simulated = false;
   d.imu_source_note = "IMU recorded (EuRoC imu0, " + FormatDoubleExact(seq.imu0.params.rate_hz) +
                       " Hz, noise model from imu0/sensor.yaml)";
+  if (!seq.groundtruth.empty() && seq.groundtruth_source != "state_groundtruth_estimate0") {
+    d.warnings.push_back("ground truth from " + seq.groundtruth_source +
+                         "/data.csv (poses only): the velocity at each frame is the slope of the "
+                         "positions within +-50 ms, the biases are not known");
+  }
   const Rigid3d& body_from_cam = seq.cam0.body_from_sensor;
-  std::vector<StampedPose> body_poses;
   for (const EurocGroundTruthState& s : seq.groundtruth) {
     d.groundtruth_world_from_cam.push_back({s.t_ns, s.world_from_body * body_from_cam});
-    body_poses.push_back({s.t_ns, s.world_from_body});
   }
   const std::string list = seq.mav0 + "/cam0/data.csv";
   const std::string depth_list = seq.mav0 + "/depth0/data.csv";
@@ -385,7 +388,8 @@ Dataset LoadEurocDataset(const std::string& path, const DatasetOptions& options)
                          [](const EurocGroundTruthState& s, int64_t t) { return s.t_ns < t; });
     if (upper == seq.groundtruth.end()) continue;
     if (upper->t_ns == f.t_ns) {
-      f.imu_velocity_in_world = upper->velocity_in_world;
+      // (A velocity derived from poses may be missing: NaN, at the ends of the poses.)
+      if (upper->velocity_in_world.allFinite()) f.imu_velocity_in_world = upper->velocity_in_world;
     } else if (upper != seq.groundtruth.begin()) {
       const auto& a = *std::prev(upper);
       const auto& b = *upper;
@@ -393,7 +397,8 @@ Dataset LoadEurocDataset(const std::string& path, const DatasetOptions& options)
           b.t_ns - f.t_ns <= options.groundtruth_max_difference_ns) {
         const double alpha =
             static_cast<double>(f.t_ns - a.t_ns) / static_cast<double>(b.t_ns - a.t_ns);
-        f.imu_velocity_in_world = (1.0 - alpha) * a.velocity_in_world + alpha * b.velocity_in_world;
+        const Eigen::Vector3d v = (1.0 - alpha) * a.velocity_in_world + alpha * b.velocity_in_world;
+        if (v.allFinite()) f.imu_velocity_in_world = v;
       }
     }
   }

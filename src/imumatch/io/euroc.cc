@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <sstream>
 
 #include <yaml-cpp/yaml.h>
@@ -251,6 +252,72 @@ std::vector<EurocGroundTruthState> ReadEurocGroundTruth(const std::string& path)
   return states;
 }
 
+std::vector<StampedPose> ReadEurocPoses(const std::string& path) {
+  std::vector<StampedPose> poses;
+  int previous_line = 0;
+  for (const TextLine& line : ReadTextFields(path, FieldSeparator::kComma)) {
+    CheckFieldCount(line, 8, path, "timestamp, p x y z, q w x y z");
+    StampedPose p;
+    p.t_ns = ParseNsField(line.fields[0], path, line.line);
+    if (!poses.empty()) {
+      CheckIncreasingTimestamp(poses.back().t_ns, previous_line, p.t_ns, path, line.line);
+    }
+    double v[7];
+    for (int i = 0; i < 7; ++i) {
+      v[i] = ParseFiniteDouble(line.fields[static_cast<size_t>(i + 1)], path, line.line,
+                               "field " + std::to_string(i + 2));
+    }
+    p.world_from_body.translation = Eigen::Vector3d(v[0], v[1], v[2]);
+    p.world_from_body.rotation = CheckedUnitQuaternion(v[3], v[4], v[5], v[6], path, line.line);
+    plausibility::CheckPosition(p.world_from_body.translation, path, line.line);
+    poses.push_back(p);
+    previous_line = line.line;
+  }
+  return poses;
+}
+
+std::vector<EurocGroundTruthState> GroundTruthFromPoses(
+    const std::vector<StampedPose>& world_from_sensor, const Rigid3d& body_from_sensor,
+    int64_t half_window_ns) {
+  IMUMATCH_CHECK(half_window_ns > 0, "half_window_ns=" << half_window_ns);
+  const Rigid3d sensor_from_body = body_from_sensor.Inverse();
+  std::vector<EurocGroundTruthState> states(world_from_sensor.size());
+  for (size_t i = 0; i < states.size(); ++i) {
+    states[i].t_ns = world_from_sensor[i].t_ns;
+    states[i].world_from_body = world_from_sensor[i].world_from_body * sensor_from_body;
+  }
+  // The slope of a straight line through the positions within the window (times relative to the
+  // sample's own, in seconds, so that large timestamps lose no precision).
+  size_t lo = 0, hi = 0;
+  for (size_t i = 0; i < states.size(); ++i) {
+    const int64_t t = states[i].t_ns;
+    while (states[lo].t_ns < t - half_window_ns) ++lo;
+    while (hi + 1 < states.size() && states[hi + 1].t_ns <= t + half_window_ns) ++hi;
+    if (lo == i || hi == i) {
+      states[i].velocity_in_world.setConstant(std::numeric_limits<double>::quiet_NaN());
+      continue;
+    }
+    double mean_t = 0.0;
+    Eigen::Vector3d mean_p = Eigen::Vector3d::Zero();
+    for (size_t j = lo; j <= hi; ++j) {
+      mean_t += 1e-9 * static_cast<double>(states[j].t_ns - t);
+      mean_p += states[j].world_from_body.translation;
+    }
+    const double n = static_cast<double>(hi - lo + 1);
+    mean_t /= n;
+    mean_p /= n;
+    double stt = 0.0;
+    Eigen::Vector3d stp = Eigen::Vector3d::Zero();
+    for (size_t j = lo; j <= hi; ++j) {
+      const double dt = 1e-9 * static_cast<double>(states[j].t_ns - t) - mean_t;
+      stt += dt * dt;
+      stp += dt * (states[j].world_from_body.translation - mean_p);
+    }
+    states[i].velocity_in_world = stp / stt;
+  }
+  return states;
+}
+
 std::string FindEurocMav0(const std::string& path) {
   std::error_code ec;
   fs::path p = fs::path(path).lexically_normal();
@@ -275,7 +342,25 @@ EurocSequence ReadEurocSequence(const std::string& path, const ImuBufferOptions&
   seq.imu = ReadEurocImu(mav0 + "/imu0/data.csv", options);
   std::error_code ec;
   const std::string gt = mav0 + "/state_groundtruth_estimate0/data.csv";
-  if (fs::exists(gt, ec)) seq.groundtruth = ReadEurocGroundTruth(gt);
+  if (fs::exists(gt, ec)) {
+    seq.groundtruth = ReadEurocGroundTruth(gt);
+    seq.groundtruth_source = "state_groundtruth_estimate0";
+  } else {
+    // A motion-capture body's poses (TUM-VI: mocap0, the IMU's; EuRoC's Vicon rooms: vicon0).
+    for (const char* sensor : {"mocap0", "vicon0"}) {
+      const std::string folder = mav0 + "/" + sensor;
+      if (!fs::exists(folder + "/data.csv", ec)) continue;
+      Rigid3d body_from_sensor;
+      const std::string yaml = folder + "/sensor.yaml";
+      if (fs::exists(yaml, ec)) {
+        body_from_sensor = GetTransform(LoadOpenCvYaml(yaml), "T_BS", yaml);
+      }
+      seq.groundtruth =
+          GroundTruthFromPoses(ReadEurocPoses(folder + "/data.csv"), body_from_sensor);
+      seq.groundtruth_source = sensor;
+      break;
+    }
+  }
   if (fs::is_directory(mav0 + "/depth0", ec)) {
     seq.depth0 = ReadEurocDepthSensor(mav0 + "/depth0/sensor.yaml");
     const std::string depth_list = mav0 + "/depth0/data.csv";

@@ -23,6 +23,9 @@ namespace imumatch {
 //   mav0/cam0/sensor.yaml intrinsics, resolution, radial-tangential distortion, rate, T_BS
 //   mav0/state_groundtruth_estimate0/data.csv (optional)
 //     "timestamp, p x y z, q w x y z, v x y z, bw x y z, ba x y z" (quaternion w first)
+//   else mav0/mocap0/ or mav0/vicon0/ data.csv (optional): "timestamp, p x y z, q w x y z", the
+//     poses of a motion-capture body, with its T_BS in that folder's sensor.yaml when there is
+//     one (else the body itself, as TUM-VI's mocap0)
 //   mav0/depth0/ (optional, not part of the published EuRoC sequences): depth registered to cam0
 //     data.csv    "timestamp [ns], filename" (uint16 PNGs in mav0/depth0/data/, cam0's pixel grid,
 //                 each timestamp equal to a cam0 timestamp; raw / depth_scale = metres, 0 = none)
@@ -74,6 +77,20 @@ struct EurocGroundTruthState {
 };
 std::vector<EurocGroundTruthState> ReadEurocGroundTruth(const std::string& path);
 
+// A pose sensor's data.csv (mav0/mocap0 as in TUM-VI, mav0/vicon0 as in EuRoC's Vicon rooms):
+// "timestamp [ns], p x y z [m], q w x y z" (quaternion w first), the sensor's pose in its world,
+// world_from_sensor. Throws InputError(path, line, ...) as ReadEurocGroundTruth does.
+std::vector<StampedPose> ReadEurocPoses(const std::string& path);
+// Body states from such poses: world_from_body = world_from_sensor * (body_from_sensor)^-1, and
+// the velocity as the least-squares slope of the body's positions over the samples within
+// half_window_ns of each (a straight line: at 120 Hz and +-50 ms, 13 samples, a 1 mm position
+// noise gives about 0.01 m/s); NaN (no velocity) where the samples do not reach both sides (the
+// ends, and the edges of gaps: TUM-VI's motion capture covers only parts of its longer
+// sequences). Biases zero.
+std::vector<EurocGroundTruthState> GroundTruthFromPoses(
+    const std::vector<StampedPose>& world_from_sensor, const Rigid3d& body_from_sensor,
+    int64_t half_window_ns = 50'000'000);
+
 // Everything of a EuRoC sequence that the project uses, from the folder holding mav0/ or the mav0
 // folder itself. The ground truth and depth0 folders are optional (empty groundtruth, no depth0 and
 // no depth_images when absent).
@@ -88,6 +105,8 @@ struct EurocSequence {
   std::vector<StampedFile> depth_images;
   ImuBuffer imu;
   std::vector<EurocGroundTruthState> groundtruth;
+  // Where groundtruth comes from: "state_groundtruth_estimate0", "mocap0", "vicon0" or empty.
+  std::string groundtruth_source;
   // cam_from_imu = (body_from_cam)^-1 * body_from_imu.
   Rigid3d CamFromImu() const { return cam0.body_from_sensor.Inverse() * imu0.body_from_sensor; }
   std::string ImagePath(const StampedFile& f) const { return mav0 + "/cam0/data/" + f.path; }

@@ -1,5 +1,11 @@
 #include "imumatch/io/euroc.h"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
 #include <gtest/gtest.h>
 
 #include "imumatch/core/error.h"
@@ -343,6 +349,120 @@ TEST(Euroc, GroundTruthCsvHasQuaternionWFirst) {
   EXPECT_DOUBLE_EQ(gt[0].accel_bias.y(), 0.547666);
   const std::string bad_q = dir.Write("b.csv", "1,0,0,0,0.5,0,0,0.5,0,0,0,0,0,0,0,0,0\n");
   ExpectInputError([&] { ReadEurocGroundTruth(bad_q); }, bad_q, 1, "norm");
+}
+
+TEST(Euroc, PoseGroundTruthParsesAndRefusesBadRows) {
+  TempDir dir;
+  const std::string path = dir.Write(
+      "data.csv",
+      "#timestamp [ns], p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], "
+      "q_RS_z []\n"
+      "1520530308199447626,0.878612,2.142470,0.947262,0.7071068,0.0,0.0,0.7071068\n"
+      "1520530308207780958,0.878700,2.142400,0.947300,1.0,0.0,0.0,0.0\n");
+  const std::vector<StampedPose> poses = ReadEurocPoses(path);
+  ASSERT_EQ(poses.size(), 2u);
+  EXPECT_EQ(poses[0].t_ns, 1520530308199447626LL);
+  // 90 deg about z, w first.
+  EXPECT_LT((poses[0].world_from_body * Eigen::Vector3d(1, 0, 0) -
+             Eigen::Vector3d(0.878612, 3.142470, 0.947262))
+                .norm(),
+            1e-6);
+  const std::string short_row = dir.Write("b.csv", "1,0,0,0,1,0,0\n");
+  ExpectInputError([&] { ReadEurocPoses(short_row); }, short_row, 1, "");
+  const std::string unsorted = dir.Write("c.csv", "5,0,0,0,1,0,0,0\n5,0,0,0,1,0,0,0\n");
+  ExpectInputError([&] { ReadEurocPoses(unsorted); }, unsorted, 2, "");
+  const std::string nan = dir.Write("d.csv", "5,0,nan,0,1,0,0,0\n");
+  ExpectInputError([&] { ReadEurocPoses(nan); }, nan, 1, "");
+}
+
+// Velocities from poses against an analytic trajectory: p(t) = (0.5 t + 0.3 t^2, sin 2t, 0),
+// sampled at 120 Hz for 1 s with a gap from 0.4 to 0.6 s, through a marker 10 cm above the body.
+TEST(Euroc, GroundTruthFromPosesDifferentiatesTheBodysPositions) {
+  const Rigid3d body_from_marker(
+      Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX())),
+      Eigen::Vector3d(0.0, 0.0, 0.1));
+  auto position = [](double t) {
+    return Eigen::Vector3d(0.5 * t + 0.3 * t * t, std::sin(2.0 * t), 0.0);
+  };
+  auto velocity = [](double t) {
+    return Eigen::Vector3d(0.5 + 0.6 * t, 2.0 * std::cos(2.0 * t), 0.0);
+  };
+  std::vector<StampedPose> marker;
+  const int64_t t0 = 1'520'530'308'000'000'000;
+  for (int k = 0; k <= 120; ++k) {
+    const double t = k / 120.0;
+    if (t > 0.4 && t < 0.6) continue;
+    const Rigid3d world_from_body(
+        Eigen::Quaterniond(Eigen::AngleAxisd(t, Eigen::Vector3d::UnitZ())), position(t));
+    marker.push_back(
+        {t0 + static_cast<int64_t>(std::llround(t * 1e9)), world_from_body * body_from_marker});
+  }
+  const std::vector<EurocGroundTruthState> states = GroundTruthFromPoses(marker, body_from_marker);
+  ASSERT_EQ(states.size(), marker.size());
+  int with_velocity = 0;
+  for (const EurocGroundTruthState& s : states) {
+    const double t = 1e-9 * static_cast<double>(s.t_ns - t0);
+    EXPECT_LT((s.world_from_body.translation - position(t)).norm(), 1e-9) << t;
+    // The window must reach both sides: not at the ends, nor at the gap's edges.
+    const bool both_sides =
+        t > 1e-6 && t < 1.0 - 1e-6 && std::abs(t - 0.4) > 1e-6 && std::abs(t - 0.6) > 1e-6;
+    EXPECT_EQ(s.velocity_in_world.allFinite(), both_sides) << t;
+    if (!both_sides) continue;
+    ++with_velocity;
+    // A straight line over +-50 ms: exact for the quadratic where the window is symmetric, the
+    // sine's curvature leaves a few mm/s; one-sided windows next to the gap and the ends lean
+    // by half the window times the acceleration (about 0.1 m/s at most here).
+    const double tolerance = (t < 0.05 || t > 0.95 || std::abs(t - 0.5) < 0.15) ? 0.15 : 0.01;
+    EXPECT_LT((s.velocity_in_world - velocity(t)).norm(), tolerance) << t;
+  }
+  EXPECT_GT(with_velocity, 90);
+}
+
+// The EuRoC flight's own ground truth read back as poses only (a mocap0 folder of its poses at
+// 200 Hz beside its camera and IMU): the same frame poses, and velocities within 2 cm/s of the
+// estimator's own.
+TEST(Euroc, AMocapFolderGivesTheFlightsPosesAndVelocities) {
+  const std::string real = DataPath("euroc_mh05_flight/mav0");
+  const std::vector<EurocGroundTruthState> truth =
+      ReadEurocGroundTruth(real + "/state_groundtruth_estimate0/data.csv");
+  TempDir dir;
+  std::string csv = "#timestamp [ns], p x, p y, p z, q w, q x, q y, q z\n";
+  for (const EurocGroundTruthState& s : truth) {
+    const Rigid3d& p = s.world_from_body;
+    std::ostringstream row;
+    row.precision(17);
+    row << s.t_ns << "," << p.translation.x() << "," << p.translation.y() << ","
+        << p.translation.z() << "," << p.rotation.w() << "," << p.rotation.x() << ","
+        << p.rotation.y() << "," << p.rotation.z() << "\n";
+    csv += row.str();
+  }
+  dir.Write("mav0/mocap0/data.csv", csv);
+  for (const char* sensor : {"cam0", "imu0"}) {
+    std::filesystem::create_directory_symlink(real + "/" + sensor, dir.Path("mav0/") + sensor);
+  }
+  const EurocSequence seq = ReadEurocSequence(dir.path());
+  EXPECT_EQ(seq.groundtruth_source, "mocap0");
+  ASSERT_EQ(seq.groundtruth.size(), truth.size());
+  std::vector<double> errors;
+  for (size_t i = 0; i < truth.size(); ++i) {
+    EXPECT_LT(
+        (seq.groundtruth[i].world_from_body.translation - truth[i].world_from_body.translation)
+            .norm(),
+        1e-9);
+    if (!seq.groundtruth[i].velocity_in_world.allFinite()) continue;
+    errors.push_back((seq.groundtruth[i].velocity_in_world - truth[i].velocity_in_world).norm());
+  }
+  EXPECT_EQ(errors.size(), truth.size() - 2);  // all but the two ends
+  // The estimate's positions jump by 8-10 mm three times (rows 850, 1030 and 1230, a second
+  // apart: where its batch segments meet), which no velocity from positions can follow for
+  // +-50 ms (about 60 samples, 1 %); elsewhere they agree to millimetres per second.
+  std::sort(errors.begin(), errors.end());
+  EXPECT_LT(errors[errors.size() / 2], 0.005);
+  EXPECT_LT(errors[errors.size() * 95 / 100], 0.01);
+  EXPECT_LT(errors[errors.size() * 99 / 100], 0.03);
+  EXPECT_LT(errors.back(), 0.2);
+  std::printf("velocity from poses vs the estimator's: median %.4f, 99 %% %.4f, max %.4f m/s\n",
+              errors[errors.size() / 2], errors[errors.size() * 99 / 100], errors.back());
 }
 
 }  // namespace
