@@ -228,7 +228,7 @@ PinholeCamera ReadCameraFile(const std::string& path) {
   std::string extension = fs::path(path).extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (extension == ".yaml" || extension == ".yml") return ReadEurocCameraSensor(path).camera;
+  if (extension == ".yaml" || extension == ".yml") return ReadYamlCamera(path);
   return ReadCameraFromText(path);
 }
 
@@ -349,7 +349,17 @@ Dataset LoadEurocDataset(const std::string& path, const DatasetOptions& options)
   d.imu = std::move(seq.imu);
   d.imu_simulated = false;
   d.imu_source_note = "IMU recorded (EuRoC imu0, " + FormatDoubleExact(seq.imu0.params.rate_hz) +
-                      " Hz, noise model from imu0/sensor.yaml)";
+                      " Hz, noise model from " + seq.imu0_calibration_file + ")";
+  if (seq.kalibr_calibration) {
+    d.warnings.push_back("no EuRoC sensor.yaml: camera and extrinsics from " +
+                         seq.cam0_calibration_file + ", IMU noise from " +
+                         seq.imu0_calibration_file);
+  }
+  if (seq.cam0.timeshift_cam_imu_s != 0.0) {
+    d.warnings.push_back("the camchain's timeshift_cam_imu (" +
+                         FormatDoubleExact(seq.cam0.timeshift_cam_imu_s) +
+                         " s) is not applied: frames keep their recorded timestamps");
+  }
   if (!seq.groundtruth.empty() && seq.groundtruth_source != "state_groundtruth_estimate0") {
     d.warnings.push_back("ground truth from " + seq.groundtruth_source +
                          "/data.csv (poses only): the velocity at each frame is the slope of the "

@@ -108,8 +108,9 @@ Dataset LoadSyntheticDataset(const std::string& root, const DatasetOptions& opti
 // 0.9172) and freiburg3 (535.4 539.2 320.1 247.6, no distortion), else the Kinect default.
 PinholeCamera TumCameraForFolderName(const std::string& folder_name);
 
-// A camera's intrinsics and lens from a file, for DatasetOptions::camera: a Kalibr / EuRoC camera
-// sensor.yaml (*.yaml, *.yml: ReadEurocCameraSensor; its extrinsics are not used) or a text line
+// A camera's intrinsics and lens from a file, for DatasetOptions::camera: a EuRoC camera
+// sensor.yaml or a Kalibr camchain.yaml's cam0 (*.yaml, *.yml: ReadYamlCamera; their extrinsics
+// are not used) or a text line
 // (ReadCameraFromText: "[radtan|equidistant] fx fy cx cy [width height [k...]]"). Throws
 // InputError naming the file (and line) when it is missing or malformed.
 PinholeCamera ReadCameraFile(const std::string& path);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <initializer_list>
 #include <limits>
 #include <sstream>
 
@@ -138,67 +139,142 @@ std::vector<StampedFile> ReadEurocDepthList(const std::string& path) {
   return ReadStampedFileList(path, "depth images");
 }
 
-EurocCameraSensor ReadEurocCameraSensor(const std::string& path) {
-  const YAML::Node root = LoadOpenCvYaml(path);
-  const std::string model = GetString(root, "camera_model", path);
+namespace {
+
+// The camera of a Kalibr / EuRoC camera node: camera_model (pinhole), intrinsics, resolution,
+// distortion_model and its coefficients under coefficients_key.
+PinholeCamera CameraFromYaml(const YAML::Node& node, const std::string& path,
+                             const std::string& coefficients_key) {
+  const std::string model = GetString(node, "camera_model", path);
   if (model != "pinhole") {
-    throw InputError(path, LineOf(root["camera_model"]),
+    throw InputError(path, LineOf(node["camera_model"]),
                      "camera_model '" + model + "' is not supported (only 'pinhole')");
   }
-  EurocCameraSensor sensor;
-  const std::vector<double> k = GetDoubles(root, "intrinsics", path, 4, 4);
-  sensor.camera.fx = k[0];
-  sensor.camera.fy = k[1];
-  sensor.camera.cx = k[2];
-  sensor.camera.cy = k[3];
-  const std::vector<double> size = GetDoubles(root, "resolution", path, 2, 2);
+  PinholeCamera camera;
+  const std::vector<double> k = GetDoubles(node, "intrinsics", path, 4, 4);
+  camera.fx = k[0];
+  camera.fy = k[1];
+  camera.cx = k[2];
+  camera.cy = k[3];
+  const std::vector<double> size = GetDoubles(node, "resolution", path, 2, 2);
   if (size[0] != std::floor(size[0]) || size[1] != std::floor(size[1]) || size[0] < 1 ||
       size[1] < 1 || size[0] > plausibility::kMaxImageSide ||
       size[1] > plausibility::kMaxImageSide) {
-    throw InputError(path, LineOf(root["resolution"]),
+    throw InputError(path, LineOf(node["resolution"]),
                      "resolution must be two whole numbers [width, height] in [1, " +
                          std::to_string(plausibility::kMaxImageSide) + "]");
   }
-  sensor.camera.width = static_cast<int>(size[0]);
-  sensor.camera.height = static_cast<int>(size[1]);
-  const std::string distortion_model = GetString(root, "distortion_model", path);
+  camera.width = static_cast<int>(size[0]);
+  camera.height = static_cast<int>(size[1]);
+  const std::string distortion_model = GetString(node, "distortion_model", path);
   if (const std::optional<DistortionModel> lens = DistortionModelFromName(distortion_model)) {
-    sensor.camera.model = *lens;
+    camera.model = *lens;
   } else {
-    throw InputError(path, LineOf(root["distortion_model"]),
+    throw InputError(path, LineOf(node["distortion_model"]),
                      "distortion_model '" + distortion_model +
                          "' is not supported (radial-tangential k1 k2 p1 p2 [k3], or equidistant "
                          "k1 k2 k3 k4; names: " +
                          kDistortionModelNames + ")");
   }
-  const bool equidistant = sensor.camera.model == DistortionModel::kEquidistant;
-  const std::vector<double> d =
-      GetDoubles(root, "distortion_coefficients", path, 4, equidistant ? 4 : 5);
-  for (size_t i = 0; i < d.size(); ++i) sensor.camera.distortion[i] = d[i];
+  const bool equidistant = camera.model == DistortionModel::kEquidistant;
+  const std::vector<double> d = GetDoubles(node, coefficients_key, path, 4, equidistant ? 4 : 5);
+  for (size_t i = 0; i < d.size(); ++i) camera.distortion[i] = d[i];
   try {
-    sensor.camera.Check();
+    camera.Check();
   } catch (const InvalidArgument& e) {
-    throw InputError(path, LineOf(root["intrinsics"]), e.what());
+    throw InputError(path, LineOf(node["intrinsics"]), e.what());
   }
+  return camera;
+}
+
+// A 4x4 transform written as Kalibr does: a list of four rows of four numbers.
+Rigid3d GetRowsTransform(const YAML::Node& map, const std::string& key, const std::string& path) {
+  const YAML::Node node = Require(map, key, path);
+  if (!node.IsSequence() || node.size() != 4) {
+    throw InputError(path, LineOf(node), key + ": expected four rows of four numbers");
+  }
+  Eigen::Matrix4d m;
+  for (int r = 0; r < 4; ++r) {
+    const YAML::Node row = node[static_cast<size_t>(r)];
+    if (!row.IsSequence() || row.size() != 4) {
+      throw InputError(path, LineOf(row), key + ": expected four rows of four numbers");
+    }
+    for (int c = 0; c < 4; ++c) {
+      m(r, c) =
+          ScalarToDouble(row[static_cast<size_t>(c)],
+                         key + "[" + std::to_string(r) + "][" + std::to_string(c) + "]", path);
+    }
+  }
+  try {
+    return Rigid3d::FromMatrix(m, 1e-6);
+  } catch (const InvalidArgument& e) {
+    throw InputError(path, LineOf(node), key + " is not a rigid transform: " + e.what());
+  }
+}
+
+// IMU noise densities and random walks (the same keys in EuRoC's sensor.yaml and Kalibr's
+// imu.yaml).
+ImuParams ImuNoiseFromYaml(const YAML::Node& node, const std::string& path,
+                           const std::string& rate_key) {
+  ImuParams params;
+  params.gyro_noise_density = GetDouble(node, "gyroscope_noise_density", path);
+  params.gyro_random_walk = GetDouble(node, "gyroscope_random_walk", path);
+  params.accel_noise_density = GetDouble(node, "accelerometer_noise_density", path);
+  params.accel_random_walk = GetDouble(node, "accelerometer_random_walk", path);
+  params.rate_hz = GetDouble(node, rate_key, path);
+  try {
+    params.Check();
+  } catch (const InvalidArgument& e) {
+    throw InputError(path, e.what());
+  }
+  return params;
+}
+
+}  // namespace
+
+EurocCameraSensor ReadEurocCameraSensor(const std::string& path) {
+  const YAML::Node root = LoadOpenCvYaml(path);
+  EurocCameraSensor sensor;
+  sensor.camera = CameraFromYaml(root, path, "distortion_coefficients");
   sensor.body_from_sensor = GetTransform(root, "T_BS", path);
   sensor.rate_hz = GetDouble(root, "rate_hz", path);
   if (sensor.rate_hz <= 0) throw InputError(path, LineOf(root["rate_hz"]), "rate_hz must be > 0");
   return sensor;
 }
 
+EurocCameraSensor ReadKalibrCamchain(const std::string& path, const std::string& camera) {
+  const YAML::Node root = LoadOpenCvYaml(path);
+  const YAML::Node node = Require(root, camera, path);
+  if (!node.IsMap()) throw InputError(path, LineOf(node), camera + ": expected a mapping");
+  EurocCameraSensor sensor;
+  sensor.camera = CameraFromYaml(node, path, "distortion_coeffs");
+  // T_cam_imu takes IMU coordinates to the camera's; the body is the IMU.
+  sensor.body_from_sensor = GetRowsTransform(node, "T_cam_imu", path).Inverse();
+  if (const YAML::Node shift = node["timeshift_cam_imu"]; shift.IsDefined() && !shift.IsNull()) {
+    sensor.timeshift_cam_imu_s = ScalarToDouble(shift, "timeshift_cam_imu", path);
+  }
+  return sensor;
+}
+
+PinholeCamera ReadYamlCamera(const std::string& path) {
+  const YAML::Node cam0 = LoadOpenCvYaml(path)["cam0"];
+  if (cam0.IsDefined() && cam0.IsMap()) return ReadKalibrCamchain(path).camera;
+  return ReadEurocCameraSensor(path).camera;
+}
+
+EurocImuSensor ReadKalibrImu(const std::string& path) {
+  const YAML::Node root = LoadOpenCvYaml(path);
+  const YAML::Node imu0 = root["imu0"];
+  EurocImuSensor sensor;
+  sensor.params =
+      ImuNoiseFromYaml(imu0.IsDefined() && imu0.IsMap() ? imu0 : root, path, "update_rate");
+  return sensor;
+}
+
 EurocImuSensor ReadEurocImuSensor(const std::string& path) {
   const YAML::Node root = LoadOpenCvYaml(path);
   EurocImuSensor sensor;
-  sensor.params.gyro_noise_density = GetDouble(root, "gyroscope_noise_density", path);
-  sensor.params.gyro_random_walk = GetDouble(root, "gyroscope_random_walk", path);
-  sensor.params.accel_noise_density = GetDouble(root, "accelerometer_noise_density", path);
-  sensor.params.accel_random_walk = GetDouble(root, "accelerometer_random_walk", path);
-  sensor.params.rate_hz = GetDouble(root, "rate_hz", path);
-  try {
-    sensor.params.Check();
-  } catch (const InvalidArgument& e) {
-    throw InputError(path, e.what());
-  }
+  sensor.params = ImuNoiseFromYaml(root, path, "rate_hz");
   sensor.body_from_sensor = GetTransform(root, "T_BS", path);
   return sensor;
 }
@@ -336,11 +412,40 @@ EurocSequence ReadEurocSequence(const std::string& path, const ImuBufferOptions&
   }
   EurocSequence seq;
   seq.mav0 = mav0;
-  seq.cam0 = ReadEurocCameraSensor(mav0 + "/cam0/sensor.yaml");
-  seq.imu0 = ReadEurocImuSensor(mav0 + "/imu0/sensor.yaml");
+  // Calibration: EuRoC's sensor.yaml files, else Kalibr's files beside mav0 or in its dso/ folder
+  // (TUM-VI's exports keep them there).
+  std::error_code ec;
+  const fs::path above = fs::path(mav0).parent_path();
+  const auto first_existing = [&](std::initializer_list<fs::path> paths) -> std::string {
+    for (const fs::path& p : paths) {
+      if (fs::is_regular_file(p, ec)) return p.string();
+    }
+    return "";
+  };
+  const std::string cam_yaml = mav0 + "/cam0/sensor.yaml";
+  const std::string camchain =
+      first_existing({above / "dso" / "camchain.yaml", above / "camchain.yaml"});
+  if (fs::exists(cam_yaml, ec) || camchain.empty()) {
+    seq.cam0 = ReadEurocCameraSensor(cam_yaml);
+    seq.cam0_calibration_file = cam_yaml;
+  } else {
+    seq.cam0 = ReadKalibrCamchain(camchain);
+    seq.cam0_calibration_file = camchain;
+    seq.kalibr_calibration = true;
+  }
+  const std::string imu_yaml = mav0 + "/imu0/sensor.yaml";
+  const std::string kalibr_imu = first_existing(
+      {above / "dso" / "imu_config.yaml", above / "imu_config.yaml", above / "imu.yaml"});
+  if (fs::exists(imu_yaml, ec) || kalibr_imu.empty()) {
+    seq.imu0 = ReadEurocImuSensor(imu_yaml);
+    seq.imu0_calibration_file = imu_yaml;
+  } else {
+    seq.imu0 = ReadKalibrImu(kalibr_imu);
+    seq.imu0_calibration_file = kalibr_imu;
+    seq.kalibr_calibration = true;
+  }
   seq.images = ReadEurocImageList(mav0 + "/cam0/data.csv");
   seq.imu = ReadEurocImu(mav0 + "/imu0/data.csv", options);
-  std::error_code ec;
   const std::string gt = mav0 + "/state_groundtruth_estimate0/data.csv";
   if (fs::exists(gt, ec)) {
     seq.groundtruth = ReadEurocGroundTruth(gt);

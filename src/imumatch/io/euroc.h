@@ -19,6 +19,8 @@ namespace imumatch {
 // EuRoC MAV / ASL folder layout (Burri et al., IJRR 2016):
 //   mav0/imu0/data.csv    "timestamp [ns], w x y z [rad/s], a x y z [m/s^2]"
 //   mav0/imu0/sensor.yaml noise densities, random walks, rate, T_BS
+//     (without the sensor.yaml files: Kalibr's camchain.yaml and imu_config.yaml / imu.yaml in
+//     the folder above mav0 or in its dso/ folder, as TUM-VI's exports have them)
 //   mav0/cam0/data.csv    "timestamp [ns], filename" (images in mav0/cam0/data/)
 //   mav0/cam0/sensor.yaml intrinsics, resolution, radial-tangential distortion, rate, T_BS
 //   mav0/state_groundtruth_estimate0/data.csv (optional)
@@ -47,7 +49,9 @@ std::vector<StampedFile> ReadEurocDepthList(const std::string& path);
 struct EurocCameraSensor {
   PinholeCamera camera;  // intrinsics, resolution, distortion (k3 = 0 when only four given)
   Rigid3d body_from_sensor;
-  double rate_hz = 0.0;
+  double rate_hz = 0.0;  // 0 when the file does not say (Kalibr's camchain)
+  // Kalibr's timeshift_cam_imu (t_imu = t_cam + shift, seconds); 0 when not given.
+  double timeshift_cam_imu_s = 0.0;
 };
 struct EurocImuSensor {
   ImuParams params;  // noise densities, random walks, rate; gravity left at the default
@@ -63,6 +67,18 @@ struct EurocDepthSensor {
 // transform (rotation block not orthonormal within 1e-6 or determinant not +1).
 EurocCameraSensor ReadEurocCameraSensor(const std::string& path);
 EurocImuSensor ReadEurocImuSensor(const std::string& path);
+
+// Kalibr's calibration files (github.com/ethz-asl/kalibr/wiki/yaml-formats), the same errors.
+// camchain.yaml: the named camera's camera_model (pinhole), intrinsics, resolution,
+// distortion_model, distortion_coeffs and T_cam_imu (four rows of four numbers, IMU to camera
+// coordinates; the body is the IMU: body_from_sensor = T_cam_imu^-1), timeshift_cam_imu if given.
+EurocCameraSensor ReadKalibrCamchain(const std::string& path, const std::string& camera = "cam0");
+// imu.yaml (Kalibr's IMU noise file; also under a top-level imu0 key as in an imu-camera chain):
+// the four noise densities and random walks and update_rate; body_from_sensor identity.
+EurocImuSensor ReadKalibrImu(const std::string& path);
+// The camera of a yaml calibration file of either kind: a Kalibr camchain (a top-level cam0) or
+// a EuRoC camera sensor.yaml.
+PinholeCamera ReadYamlCamera(const std::string& path);
 // Also InputError(path, line, ...) when depth_scale is not a finite number > 0, or registered_to is
 // given and is not "cam0" (depth on another camera's grid would be silently misread).
 EurocDepthSensor ReadEurocDepthSensor(const std::string& path);
@@ -107,6 +123,9 @@ struct EurocSequence {
   std::vector<EurocGroundTruthState> groundtruth;
   // Where groundtruth comes from: "state_groundtruth_estimate0", "mocap0", "vicon0" or empty.
   std::string groundtruth_source;
+  // The files cam0 and imu0 were read from: their sensor.yaml, or Kalibr's files in their place.
+  std::string cam0_calibration_file, imu0_calibration_file;
+  bool kalibr_calibration = false;  // either is a Kalibr file
   // cam_from_imu = (body_from_cam)^-1 * body_from_imu.
   Rigid3d CamFromImu() const { return cam0.body_from_sensor.Inverse() * imu0.body_from_sensor; }
   std::string ImagePath(const StampedFile& f) const { return mav0 + "/cam0/data/" + f.path; }

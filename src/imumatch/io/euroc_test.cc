@@ -465,6 +465,107 @@ TEST(Euroc, AMocapFolderGivesTheFlightsPosesAndVelocities) {
               errors[errors.size() / 2], errors[errors.size() * 99 / 100], errors.back());
 }
 
+// EuRoC's cam0 and imu0 calibration written as Kalibr writes it (camchain.yaml with T_cam_imu as
+// four rows, imu.yaml under imu0): the same camera, extrinsics and noise model as EuRoC's own
+// sensor.yaml files give; errors name the file and line.
+std::string EurocCamchain(const Rigid3d& cam_from_imu, const std::string& extra = "") {
+  const Eigen::Matrix4d m = cam_from_imu.ToMatrix();
+  std::ostringstream y;
+  y.precision(17);
+  y << "cam0:\n  T_cam_imu:\n";
+  for (int r = 0; r < 4; ++r) {
+    y << "  - [" << m(r, 0) << ", " << m(r, 1) << ", " << m(r, 2) << ", " << m(r, 3) << "]\n";
+  }
+  y << "  cam_overlaps: []\n  camera_model: pinhole\n"
+       "  distortion_coeffs: [-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05]\n"
+       "  distortion_model: radtan\n  intrinsics: [458.654, 457.296, 367.215, 248.375]\n"
+       "  resolution: [752, 480]\n  rostopic: /cam0/image_raw\n"
+    << extra;
+  return y.str();
+}
+
+TEST(Euroc, KalibrFilesGiveWhatEurocsSensorYamlGives) {
+  const std::string real = DataPath("euroc_mh05_flight/mav0");
+  const EurocCameraSensor cam = ReadEurocCameraSensor(real + "/cam0/sensor.yaml");
+  const EurocImuSensor imu = ReadEurocImuSensor(real + "/imu0/sensor.yaml");
+  const Rigid3d cam_from_imu = cam.body_from_sensor.Inverse() * imu.body_from_sensor;
+  TempDir dir;
+  const std::string chain =
+      dir.Write("camchain.yaml", EurocCamchain(cam_from_imu, "  timeshift_cam_imu: 0.0021\n"));
+  const EurocCameraSensor kalibr = ReadKalibrCamchain(chain);
+  EXPECT_TRUE(kalibr.camera.SameImageGeometry(cam.camera));
+  EXPECT_LT((kalibr.body_from_sensor.Inverse().ToMatrix() - cam_from_imu.ToMatrix()).norm(), 1e-12);
+  EXPECT_DOUBLE_EQ(kalibr.timeshift_cam_imu_s, 0.0021);
+  // Either yaml gives its camera (as `--camera FILE` reads it).
+  EXPECT_TRUE(ReadYamlCamera(chain).SameImageGeometry(cam.camera));
+  EXPECT_TRUE(ReadYamlCamera(real + "/cam0/sensor.yaml").SameImageGeometry(cam.camera));
+  const std::string imu_yaml = dir.Write(
+      "imu.yaml",
+      "imu0:\n  accelerometer_noise_density: 2.0000e-3\n  accelerometer_random_walk: 3.0000e-3\n"
+      "  gyroscope_noise_density: 1.6968e-04\n  gyroscope_random_walk: 1.9393e-05\n"
+      "  rostopic: /imu0\n  update_rate: 200.0\n");
+  const EurocImuSensor kalibr_imu = ReadKalibrImu(imu_yaml);
+  EXPECT_DOUBLE_EQ(kalibr_imu.params.gyro_noise_density, imu.params.gyro_noise_density);
+  EXPECT_DOUBLE_EQ(kalibr_imu.params.accel_random_walk, imu.params.accel_random_walk);
+  EXPECT_DOUBLE_EQ(kalibr_imu.params.rate_hz, 200.0);
+  // Flat, as Kalibr's imu.yaml and TUM-VI's imu_config.yaml are.
+  const std::string flat = dir.Write(
+      "imu_flat.yaml",
+      "accelerometer_noise_density: 0.0028\naccelerometer_random_walk: 0.00086\n"
+      "gyroscope_noise_density: 0.00016\ngyroscope_random_walk: 0.000022\nupdate_rate: 200.0\n");
+  EXPECT_DOUBLE_EQ(ReadKalibrImu(flat).params.gyro_random_walk, 0.000022);
+
+  // Errors: the camera missing, a row short, a transform that is not rigid, a missing key.
+  const std::string kCamera =
+      "  camera_model: pinhole\n  distortion_coeffs: [0, 0, 0, 0]\n  distortion_model: radtan\n"
+      "  intrinsics: [458.654, 457.296, 367.215, 248.375]\n  resolution: [752, 480]\n";
+  ExpectInputError([&] { ReadKalibrCamchain(chain, "cam1"); }, chain, 0, "missing key 'cam1'");
+  const std::string short_row =
+      dir.Write("b.yaml",
+                "cam0:\n  T_cam_imu:\n  - [1, 0, 0, 0]\n  - [0, 1, 0]\n  - [0, 0, 1, 0]\n"
+                "  - [0, 0, 0, 1]\n" +
+                    kCamera);
+  ExpectInputError([&] { ReadKalibrCamchain(short_row); }, short_row, 4, "four rows");
+  const std::string not_rigid =
+      dir.Write("c.yaml",
+                "cam0:\n  T_cam_imu:\n  - [2, 0, 0, 0]\n  - [0, 1, 0, 0]\n  - [0, 0, 1, 0]\n"
+                "  - [0, 0, 0, 1]\n" +
+                    kCamera);
+  ExpectInputError([&] { ReadKalibrCamchain(not_rigid); }, not_rigid, 3, "not a rigid transform");
+  const std::string no_rate = dir.Write("d.yaml", "gyroscope_noise_density: 0.00016\n");
+  ExpectInputError([&] { ReadKalibrImu(no_rate); }, no_rate, 0, "missing key");
+}
+
+// A EuRoC-layout recording without sensor.yaml files and its Kalibr files in dso/ (as TUM-VI's
+// exports): read with the same camera and extrinsics as from EuRoC's own files.
+TEST(Euroc, AFolderWithKalibrFilesInDsoReadsLikeItsSensorYaml) {
+  const std::string real = DataPath("euroc_mh05_flight/mav0");
+  const EurocSequence reference = ReadEurocSequence(real);
+  TempDir dir;
+  dir.Write("dso/camchain.yaml", EurocCamchain(reference.CamFromImu()));
+  dir.Write("dso/imu_config.yaml",
+            "accelerometer_noise_density: 2.0000e-3\naccelerometer_random_walk: 3.0000e-3\n"
+            "gyroscope_noise_density: 1.6968e-04\ngyroscope_random_walk: 1.9393e-05\n"
+            "update_rate: 200.0\n");
+  for (const char* sensor : {"cam0", "imu0"}) {
+    std::filesystem::create_directories(dir.Path(std::string("mav0/") + sensor));
+    std::filesystem::copy_file(real + "/" + sensor + "/data.csv",
+                               dir.Path(std::string("mav0/") + sensor + "/data.csv"));
+  }
+  std::filesystem::create_directory_symlink(real + "/cam0/data", dir.Path("mav0/cam0/data"));
+  const EurocSequence seq = ReadEurocSequence(dir.path());
+  EXPECT_TRUE(seq.kalibr_calibration);
+  EXPECT_EQ(seq.cam0_calibration_file, dir.Path("dso/camchain.yaml"));
+  EXPECT_TRUE(seq.cam0.camera.SameImageGeometry(reference.cam0.camera));
+  EXPECT_LT((seq.CamFromImu().ToMatrix() - reference.CamFromImu().ToMatrix()).norm(), 1e-12);
+  EXPECT_DOUBLE_EQ(seq.imu0.params.accel_noise_density, reference.imu0.params.accel_noise_density);
+  EXPECT_EQ(seq.images.size(), reference.images.size());
+  // Without either, the error names the sensor.yaml that EuRoC's layout expects.
+  std::filesystem::remove(dir.Path("dso/camchain.yaml"));
+  ExpectInputError([&] { ReadEurocSequence(dir.path()); }, dir.Path("mav0/cam0/sensor.yaml"), 0,
+                   "");
+}
+
 }  // namespace
 }  // namespace imumatch
 
