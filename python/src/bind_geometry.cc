@@ -252,7 +252,8 @@ K x the undistorted bearing: where the guided matcher predicts and searches.)")
           py::arg("uv"), "Image pixels -> undistorted normalized coordinates (x/z, y/z).")
       .def("__repr__", &PinholeCamera::ToString, "Size, intrinsics, distortion, depth scale.");
   m.def("read_camera", &ReadCameraFile, py::arg("path"),
-        "Reads a camera file: a Kalibr/EuRoC camera sensor.yaml (*.yaml) or a text line "
+        "Reads a camera file: a EuRoC camera sensor.yaml or a Kalibr camchain.yaml's cam0 "
+        "(*.yaml) or a text line "
         "('[radtan|equidistant] fx fy cx cy [width height [k...]]'); raises InputError naming "
         "the file and line.");
 
