@@ -355,10 +355,13 @@ Dataset LoadEurocDataset(const std::string& path, const DatasetOptions& options)
                          seq.cam0_calibration_file + ", IMU noise from " +
                          seq.imu0_calibration_file);
   }
-  if (seq.cam0.timeshift_cam_imu_s != 0.0) {
-    d.warnings.push_back("the camchain's timeshift_cam_imu (" +
+  // Kalibr's timeshift: t_imu = t_cam + shift. The frames move into the IMU's clock (the ground
+  // truth's, for EuRoC and TUM-VI); depth0 rows pair with cam0 rows by their recorded times.
+  const int64_t shift_ns = std::llround(seq.cam0.timeshift_cam_imu_s * 1e9);
+  if (shift_ns != 0) {
+    d.warnings.push_back("frame timestamps moved by the camchain's timeshift_cam_imu (" +
                          FormatDoubleExact(seq.cam0.timeshift_cam_imu_s) +
-                         " s) is not applied: frames keep their recorded timestamps");
+                         " s) into the IMU's clock (t_imu = t_cam + shift)");
   }
   if (!seq.groundtruth.empty() && seq.groundtruth_source != "state_groundtruth_estimate0") {
     d.warnings.push_back("ground truth from " + seq.groundtruth_source +
@@ -376,7 +379,7 @@ Dataset LoadEurocDataset(const std::string& path, const DatasetOptions& options)
   auto depth = seq.depth_images.begin();
   for (const StampedFile& f : seq.images) {
     FrameRecord r;
-    r.t_ns = f.t_ns;
+    r.t_ns = f.t_ns + shift_ns;
     r.image_path = seq.ImagePath(f);
     if (options.check_files_exist) CheckExists(r.image_path, list, f.line);
     if (depth != seq.depth_images.end() && depth->t_ns == f.t_ns) {

@@ -252,6 +252,11 @@ EurocCameraSensor ReadKalibrCamchain(const std::string& path, const std::string&
   sensor.body_from_sensor = GetRowsTransform(node, "T_cam_imu", path).Inverse();
   if (const YAML::Node shift = node["timeshift_cam_imu"]; shift.IsDefined() && !shift.IsNull()) {
     sensor.timeshift_cam_imu_s = ScalarToDouble(shift, "timeshift_cam_imu", path);
+    if (std::abs(sensor.timeshift_cam_imu_s) > 1.0) {
+      throw InputError(path, LineOf(shift),
+                       "timeshift_cam_imu is " + shift.Scalar() +
+                           " s: a camera-IMU time offset beyond 1 s is not a calibration");
+    }
   }
   return sensor;
 }

@@ -10,6 +10,7 @@
 
 #include "imumatch/core/error.h"
 #include "imumatch/core/time.h"
+#include "imumatch/io/dataset.h"
 #include "imumatch/io/image_io.h"
 #include "imumatch/io/io_test_util.h"
 #include "imumatch/testing/test_data.h"
@@ -560,6 +561,20 @@ TEST(Euroc, AFolderWithKalibrFilesInDsoReadsLikeItsSensorYaml) {
   EXPECT_LT((seq.CamFromImu().ToMatrix() - reference.CamFromImu().ToMatrix()).norm(), 1e-12);
   EXPECT_DOUBLE_EQ(seq.imu0.params.accel_noise_density, reference.imu0.params.accel_noise_density);
   EXPECT_EQ(seq.images.size(), reference.images.size());
+  // Kalibr's timeshift (t_imu = t_cam + shift) moves the frames into the IMU's clock, and the
+  // loader says so; beyond a second it is no calibration.
+  dir.Write("dso/camchain.yaml",
+            EurocCamchain(reference.CamFromImu(), "  timeshift_cam_imu: 0.0021\n"));
+  const Dataset shifted = LoadDataset(dir.path());
+  ASSERT_EQ(shifted.frames.size(), reference.images.size());
+  EXPECT_EQ(shifted.frames[5].t_ns, reference.images[5].t_ns + 2'100'000);
+  bool said = false;
+  for (const std::string& w : shifted.warnings)
+    said |= w.find("timeshift_cam_imu") != std::string::npos;
+  EXPECT_TRUE(said);
+  const std::string far = dir.Write(
+      "dso/camchain.yaml", EurocCamchain(reference.CamFromImu(), "  timeshift_cam_imu: -1.5\n"));
+  ExpectInputError([&] { ReadEurocSequence(dir.path()); }, far, 14, "beyond 1 s");
   // Without either, the error names the sensor.yaml that EuRoC's layout expects.
   std::filesystem::remove(dir.Path("dso/camchain.yaml"));
   ExpectInputError([&] { ReadEurocSequence(dir.path()); }, dir.Path("mav0/cam0/sensor.yaml"), 0,
