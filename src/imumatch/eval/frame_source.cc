@@ -14,10 +14,11 @@ namespace imumatch {
 std::function<cv::Mat(size_t)> MakeDiskImageReader(const Dataset& dataset) {
   auto frames = std::make_shared<std::vector<FrameRecord>>(dataset.frames);
   const int width = dataset.camera.width, height = dataset.camera.height;
-  return [frames, width, height](size_t index) {
+  const SixteenBitImages sixteen_bit = dataset.sixteen_bit_images;
+  return [frames, width, height, sixteen_bit](size_t index) {
     IMUMATCH_CHECK(index < frames->size(), "frame index " << index);
     const FrameRecord& f = (*frames)[index];
-    cv::Mat image = LoadImage(f.image_path, ImageColor::kGray);
+    cv::Mat image = LoadImage(f.image_path, ImageColor::kGray, sixteen_bit);
     if (width > 0 && height > 0 && (image.cols != width || image.rows != height)) {
       throw InputError(f.image_path, "image is " + std::to_string(image.cols) + "x" +
                                          std::to_string(image.rows) + ", the camera is " +

@@ -348,6 +348,7 @@ Dataset LoadEurocDataset(const std::string& path, const DatasetOptions& options)
   d.imu_params = seq.imu0.params;
   d.imu = std::move(seq.imu);
   d.imu_simulated = false;
+  d.sixteen_bit_images = SixteenBitImages::kScaleTo8Bit;
   d.imu_source_note = "IMU recorded (EuRoC imu0, " + FormatDoubleExact(seq.imu0.params.rate_hz) +
                       " Hz, noise model from " + seq.imu0_calibration_file + ")";
   if (seq.kalibr_calibration) {

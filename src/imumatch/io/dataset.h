@@ -12,6 +12,7 @@
 #include "imumatch/core/types.h"
 #include "imumatch/imu/imu_buffer.h"
 #include "imumatch/imu/imu_params.h"
+#include "imumatch/io/image_io.h"
 #include "imumatch/io/tum_rgbd.h"
 #include "imumatch/sim/spline_trajectory.h"
 
@@ -46,6 +47,9 @@ struct Dataset {
   ImuParams imu_params;         // noise model of the IMU (recorded: sensor.yaml; simulated: model)
   Rigid3d cam_from_imu;         // p_in_cam = cam_from_imu * p_in_imu
   std::vector<StampedPose> groundtruth_world_from_cam;  // full-rate ground truth (may be empty)
+  // 16-bit gray camera images: scaled to 8 bits in the EuRoC layout (TUM-VI's are 16-bit),
+  // refused elsewhere (there a depth PNG listed as an image is the likelier cause).
+  SixteenBitImages sixteen_bit_images = SixteenBitImages::kRefuse;
   // What the loader assumed or dropped that the user should know (frames without a depth
   // partner, a layout read as another, an unused file that could not be read), one line each.
   std::vector<std::string> warnings;

@@ -152,7 +152,12 @@ cv::Mat DecodeChecked(const std::string& file, const std::string& path, bool gra
   return image;
 }
 
-cv::Mat ToImage(const cv::Mat& raw, const std::string& path, ImageColor color) {
+cv::Mat ToImage(const cv::Mat& decoded, const std::string& path, ImageColor color,
+                SixteenBitImages sixteen_bit) {
+  cv::Mat raw = decoded;
+  if (raw.type() == CV_16UC1 && sixteen_bit == SixteenBitImages::kScaleTo8Bit) {
+    raw.convertTo(raw, CV_8U, 1.0 / 257.0);  // 65535 -> 255, rounded (saturate_cast)
+  }
   if (raw.depth() != CV_8U) {
     throw InputError(path, "expected an 8-bit image, got " + DepthText(raw.depth()) +
                                " (is this a depth image?)");
@@ -199,16 +204,17 @@ cv::Mat ToDepth(const cv::Mat& raw, const std::string& path, cv::Size expected_s
 
 }  // namespace
 
-cv::Mat LoadImage(const std::string& path, ImageColor color) {
-  return DecodeImage(ReadFileChecked(path), path, color);
+cv::Mat LoadImage(const std::string& path, ImageColor color, SixteenBitImages sixteen_bit) {
+  return DecodeImage(ReadFileChecked(path), path, color, sixteen_bit);
 }
 
 cv::Mat LoadDepth(const std::string& path, cv::Size expected_size) {
   return DecodeDepth(ReadFileChecked(path), path, expected_size);
 }
 
-cv::Mat DecodeImage(const std::string& bytes, const std::string& name, ImageColor color) {
-  return ToImage(DecodeChecked(bytes, name, color == ImageColor::kGray), name, color);
+cv::Mat DecodeImage(const std::string& bytes, const std::string& name, ImageColor color,
+                    SixteenBitImages sixteen_bit) {
+  return ToImage(DecodeChecked(bytes, name, color == ImageColor::kGray), name, color, sixteen_bit);
 }
 
 cv::Mat DecodeDepth(const std::string& bytes, const std::string& name, cv::Size expected_size) {
@@ -218,7 +224,7 @@ cv::Mat DecodeDepth(const std::string& bytes, const std::string& name, cv::Size 
 RgbdImages LoadRgbd(const std::string& image_path, const std::string& depth_path,
                     ImageColor color) {
   RgbdImages out;
-  out.image = LoadImage(image_path, color);
+  out.image = LoadImage(image_path, color, SixteenBitImages::kRefuse);
   const cv::Mat depth = LoadDepth(depth_path);
   if (depth.size() != out.image.size()) {
     throw InputError(depth_path, "depth image is " + SizeText(depth.size()) +

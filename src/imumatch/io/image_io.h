@@ -15,9 +15,17 @@ enum class ImageColor {
   kColor,  // CV_8UC3 BGR (gray images expanded)
 };
 
+// What a 16-bit single-channel camera image becomes: refused (a depth PNG listed as an image by
+// mistake is the likelier cause in layouts of 8-bit cameras), or scaled to 8 bits as cv::imread
+// does for gray (value / 257, rounded), for layouts whose cameras record 16 bits (TUM-VI's EuRoC
+// exports are 16-bit PNGs).
+enum class SixteenBitImages { kRefuse, kScaleTo8Bit };
+
 // Loads an 8-bit image. Throws InputError(path, ...) when the file is missing, empty (0 bytes),
-// not decodable, decodes to an empty image, or is not 8-bit (e.g. a 16-bit depth PNG by mistake).
-cv::Mat LoadImage(const std::string& path, ImageColor color = ImageColor::kGray);
+// not decodable, decodes to an empty image, or is not 8-bit (e.g. a 16-bit depth PNG by mistake;
+// unless sixteen_bit says to scale a 16-bit gray image).
+cv::Mat LoadImage(const std::string& path, ImageColor color = ImageColor::kGray,
+                  SixteenBitImages sixteen_bit = SixteenBitImages::kRefuse);
 
 // Loads a 16-bit single-channel depth image (CV_16UC1, raw units; metres = raw / depth_scale).
 // Throws InputError(path, ...) for the cases above, for an 8-bit or multi-channel image ("depth
@@ -27,7 +35,8 @@ cv::Mat LoadDepth(const std::string& path, cv::Size expected_size = cv::Size());
 // The same from a file's bytes already in memory (e.g. a PNG-encoded stream); `name` is what the
 // errors call it.
 cv::Mat DecodeImage(const std::string& bytes, const std::string& name,
-                    ImageColor color = ImageColor::kGray);
+                    ImageColor color = ImageColor::kGray,
+                    SixteenBitImages sixteen_bit = SixteenBitImages::kRefuse);
 cv::Mat DecodeDepth(const std::string& bytes, const std::string& name,
                     cv::Size expected_size = cv::Size());
 

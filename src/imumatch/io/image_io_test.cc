@@ -128,6 +128,53 @@ TEST(ImageIo, RejectsEightBitDepthAndSixteenBitImage) {
                    "64x48, expected 640x480");
 }
 
+// A 16-bit gray camera image (TUM-VI's are): scaled to 8 bits as cv::imread does for gray when
+// the layout allows it (value / 257, rounded: 0 -> 0, 257 k -> k, 65535 -> 255), and equal to
+// what cv::imread(IMREAD_GRAYSCALE) reads; refused by default.
+TEST(ImageIo, SixteenBitCameraImagesScaleWhenTheLayoutAllows) {
+  TempDir dir;
+  cv::Mat raw(48, 64, CV_16UC1);
+  for (int r = 0; r < raw.rows; ++r) {
+    for (int c = 0; c < raw.cols; ++c)
+      raw.at<uint16_t>(r, c) = static_cast<uint16_t>(r * 1301 + c * 17);
+  }
+  raw.at<uint16_t>(0, 0) = 0;
+  raw.at<uint16_t>(0, 1) = 257 * 200;
+  raw.at<uint16_t>(0, 2) = 65535;
+  raw.at<uint16_t>(0, 3) = 257 * 10 + 128;  // 10.498: rounds down
+  raw.at<uint16_t>(0, 4) = 257 * 10 + 129;  // 10.502: rounds up
+  const std::string path = dir.Path("cam16.png");
+  WriteImage(path, raw);
+  ExpectInputError([&] { LoadImage(path); }, path, 0, "8-bit");
+  const cv::Mat gray = LoadImage(path, ImageColor::kGray, SixteenBitImages::kScaleTo8Bit);
+  ASSERT_EQ(gray.type(), CV_8UC1);
+  EXPECT_EQ(gray.at<uint8_t>(0, 0), 0);
+  EXPECT_EQ(gray.at<uint8_t>(0, 1), 200);
+  EXPECT_EQ(gray.at<uint8_t>(0, 2), 255);
+  EXPECT_EQ(gray.at<uint8_t>(0, 3), 10);
+  EXPECT_EQ(gray.at<uint8_t>(0, 4), 11);
+  for (int r = 0; r < raw.rows; ++r) {
+    for (int c = 5; c < raw.cols; ++c) {
+      ASSERT_EQ(gray.at<uint8_t>(r, c), std::lround(raw.at<uint16_t>(r, c) / 257.0))
+          << r << "," << c;
+    }
+  }
+  // OpenCV's own reading of it, within its rounding.
+  cv::Mat theirs = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  ASSERT_EQ(theirs.type(), CV_8UC1);
+  double worst = 0.0;
+  cv::minMaxLoc(cv::abs(theirs - gray), nullptr, &worst);
+  EXPECT_LE(worst, 1.0);
+  const cv::Mat color = LoadImage(path, ImageColor::kColor, SixteenBitImages::kScaleTo8Bit);
+  EXPECT_EQ(color.type(), CV_8UC3);
+  EXPECT_EQ(color.at<cv::Vec3b>(0, 1), cv::Vec3b(200, 200, 200));
+  // A 16-bit colour image stays refused.
+  const std::string rgb16 = dir.Path("rgb16.png");
+  WriteImage(rgb16, cv::Mat(8, 8, CV_16UC3, cv::Scalar(1000, 2000, 3000)));
+  ExpectInputError([&] { LoadImage(rgb16, ImageColor::kGray, SixteenBitImages::kScaleTo8Bit); },
+                   rgb16, 0, "8-bit");
+}
+
 TEST(ImageIo, ImagesOfDifferentSizes) {
   TempDir dir;
   const std::string rgb = dir.Path("rgb.png");
