@@ -305,55 +305,60 @@ EurocDepthSensor ReadEurocDepthSensor(const std::string& path) {
   return sensor;
 }
 
-std::vector<EurocGroundTruthState> ReadEurocGroundTruth(const std::string& path) {
-  std::vector<EurocGroundTruthState> states;
+namespace {
+
+// Rows "timestamp [ns], p x y z, q w x y z" and `extra` more numbers, timestamps strictly
+// increasing (a unit quaternion, w first; a plausible position): row(t_ns, pose, extra numbers,
+// line) for each. Both of the layout's pose files (the estimator's states, a pose sensor's).
+template <typename Row>
+void ForEachPoseRow(const std::string& path, size_t extra, const char* columns, Row&& row) {
+  int64_t previous_t = 0;
   int previous_line = 0;
+  std::vector<double> v(7 + extra);
   for (const TextLine& line : ReadTextFields(path, FieldSeparator::kComma)) {
-    CheckFieldCount(line, 17, path, "timestamp, p x y z, q w x y z, v x y z, bw x y z, ba x y z");
-    EurocGroundTruthState s;
-    s.t_ns = ParseNsField(line.fields[0], path, line.line);
-    if (!states.empty()) {
-      CheckIncreasingTimestamp(states.back().t_ns, previous_line, s.t_ns, path, line.line);
+    CheckFieldCount(line, 8 + extra, path, columns);
+    const int64_t t_ns = ParseNsField(line.fields[0], path, line.line);
+    if (previous_line > 0) {
+      CheckIncreasingTimestamp(previous_t, previous_line, t_ns, path, line.line);
     }
-    double v[16];
-    for (int i = 0; i < 16; ++i) {
-      v[i] = ParseFiniteDouble(line.fields[static_cast<size_t>(i + 1)], path, line.line,
-                               "field " + std::to_string(i + 2));
+    for (size_t i = 0; i < v.size(); ++i) {
+      v[i] =
+          ParseFiniteDouble(line.fields[i + 1], path, line.line, "field " + std::to_string(i + 2));
     }
-    s.world_from_body.translation = Eigen::Vector3d(v[0], v[1], v[2]);
-    s.world_from_body.rotation = CheckedUnitQuaternion(v[3], v[4], v[5], v[6], path, line.line);
-    s.velocity_in_world = Eigen::Vector3d(v[7], v[8], v[9]);
-    plausibility::CheckPosition(s.world_from_body.translation, path, line.line);
-    plausibility::CheckVelocity(s.velocity_in_world, path, line.line);
-    s.gyro_bias = Eigen::Vector3d(v[10], v[11], v[12]);
-    s.accel_bias = Eigen::Vector3d(v[13], v[14], v[15]);
-    states.push_back(s);
+    Rigid3d pose;
+    pose.translation = Eigen::Vector3d(v[0], v[1], v[2]);
+    pose.rotation = CheckedUnitQuaternion(v[3], v[4], v[5], v[6], path, line.line);
+    plausibility::CheckPosition(pose.translation, path, line.line);
+    row(t_ns, pose, v.data() + 7, line.line);
+    previous_t = t_ns;
     previous_line = line.line;
   }
+}
+
+}  // namespace
+
+std::vector<EurocGroundTruthState> ReadEurocGroundTruth(const std::string& path) {
+  std::vector<EurocGroundTruthState> states;
+  ForEachPoseRow(path, 9, "timestamp, p x y z, q w x y z, v x y z, bw x y z, ba x y z",
+                 [&](int64_t t_ns, const Rigid3d& pose, const double* v, int line) {
+                   EurocGroundTruthState s;
+                   s.t_ns = t_ns;
+                   s.world_from_body = pose;
+                   s.velocity_in_world = Eigen::Vector3d(v[0], v[1], v[2]);
+                   plausibility::CheckVelocity(s.velocity_in_world, path, line);
+                   s.gyro_bias = Eigen::Vector3d(v[3], v[4], v[5]);
+                   s.accel_bias = Eigen::Vector3d(v[6], v[7], v[8]);
+                   states.push_back(s);
+                 });
   return states;
 }
 
 std::vector<StampedPose> ReadEurocPoses(const std::string& path) {
   std::vector<StampedPose> poses;
-  int previous_line = 0;
-  for (const TextLine& line : ReadTextFields(path, FieldSeparator::kComma)) {
-    CheckFieldCount(line, 8, path, "timestamp, p x y z, q w x y z");
-    StampedPose p;
-    p.t_ns = ParseNsField(line.fields[0], path, line.line);
-    if (!poses.empty()) {
-      CheckIncreasingTimestamp(poses.back().t_ns, previous_line, p.t_ns, path, line.line);
-    }
-    double v[7];
-    for (int i = 0; i < 7; ++i) {
-      v[i] = ParseFiniteDouble(line.fields[static_cast<size_t>(i + 1)], path, line.line,
-                               "field " + std::to_string(i + 2));
-    }
-    p.world_from_body.translation = Eigen::Vector3d(v[0], v[1], v[2]);
-    p.world_from_body.rotation = CheckedUnitQuaternion(v[3], v[4], v[5], v[6], path, line.line);
-    plausibility::CheckPosition(p.world_from_body.translation, path, line.line);
-    poses.push_back(p);
-    previous_line = line.line;
-  }
+  ForEachPoseRow(path, 0, "timestamp, p x y z, q w x y z",
+                 [&](int64_t t_ns, const Rigid3d& pose, const double*, int) {
+                   poses.push_back({t_ns, pose});
+                 });
   return poses;
 }
 
