@@ -184,6 +184,9 @@ Timestamps are int64 nanoseconds. Load with imumatch.load_dataset.)")
       .def_readonly("imu_params", &Dataset::imu_params, "ImuParams: noise model of the IMU.")
       .def_readonly("cam_from_imu", &Dataset::cam_from_imu,
                     "Rigid3d: p_in_cam = cam_from_imu * p_in_imu.")
+      .def_readonly("warnings", &Dataset::warnings,
+                    "What the loader assumed or dropped, one line each (e.g. Kalibr calibration "
+                    "files read in place of sensor.yaml, a ground truth of poses only).")
       .def_property_readonly(
           "groundtruth",
           [](const Dataset& d) {

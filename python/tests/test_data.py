@@ -202,3 +202,51 @@ def test_the_front_end_tracks_a_synthetic_walk_without_ground_truth():
     # A dataset without an IMU cannot be tracked: the error says so.
     with pytest.raises(imumatch.InputError):
         imumatch.track(os.path.join(data_dir(), "tum_fr1_xyz_pair"))
+
+
+def test_a_tum_vi_like_folder_loads_with_kalibr_files_mocap_poses_and_16_bit_frames(tmp_path):
+    # TUM-VI's exports: the EuRoC layout without sensor.yaml files (Kalibr's camchain.yaml and
+    # imu_config.yaml in dso/), ground truth as mocap0 poses, 16-bit frames.
+    cam = imumatch.PinholeCamera.tum_vi_cam0()
+    seq = imumatch.make_synthetic_sequence("walk", frame_times_s=[1.0, 1.05], camera=cam)
+    imumatch.write_synthetic_sequence(seq, str(tmp_path), format="euroc")
+    mav0 = tmp_path / "mav0"
+    euroc = imumatch.load_dataset(str(tmp_path))
+    (mav0 / "cam0" / "sensor.yaml").unlink()
+    (mav0 / "imu0" / "sensor.yaml").unlink()
+    (tmp_path / "dso").mkdir()
+    m = euroc.cam_from_imu.matrix()
+    rows = "".join("  - [%s]\n" % ", ".join(repr(float(v)) for v in m[r]) for r in range(4))
+    d = ", ".join(repr(float(v)) for v in cam.distortion[:4])
+    (tmp_path / "dso" / "camchain.yaml").write_text(
+        "cam0:\n  T_cam_imu:\n" + rows + "  camera_model: pinhole\n"
+        "  distortion_model: equidistant\n  distortion_coeffs: [%s]\n"
+        "  intrinsics: [%r, %r, %r, %r]\n  resolution: [512, 512]\n"
+        % (d, cam.fx, cam.fy, cam.cx, cam.cy))
+    p = euroc.imu_params
+    (tmp_path / "dso" / "imu_config.yaml").write_text(
+        "accelerometer_noise_density: %r\naccelerometer_random_walk: %r\n"
+        "gyroscope_noise_density: %r\ngyroscope_random_walk: %r\nupdate_rate: %r\n"
+        % (p.accel_noise_density, p.accel_random_walk, p.gyro_noise_density,
+           p.gyro_random_walk, p.rate_hz))
+    states = (mav0 / "state_groundtruth_estimate0" / "data.csv").read_text().splitlines()
+    (mav0 / "mocap0").mkdir()
+    (mav0 / "mocap0" / "data.csv").write_text(
+        "".join(",".join(line.split(",")[:8]) + "\n" for line in states if line[0] != "#"))
+    for f in (mav0 / "state_groundtruth_estimate0").iterdir():
+        f.unlink()
+    (mav0 / "state_groundtruth_estimate0").rmdir()
+    first = sorted((mav0 / "cam0" / "data").iterdir())[0]
+    gray8 = cv2.imread(str(first), cv2.IMREAD_GRAYSCALE)
+    cv2.imwrite(str(first), gray8.astype(np.uint16) * 257)
+    ds = imumatch.load_dataset(str(tmp_path))
+    assert any("camchain.yaml" in w for w in ds.warnings)
+    assert any("mocap0" in w for w in ds.warnings)
+    np.testing.assert_allclose(ds.cam_from_imu.matrix(), m, atol=1e-12)
+    assert ds.camera.wider_than_field()
+    image, _ = ds.read_frame(0)
+    assert image.dtype == np.uint8
+    np.testing.assert_array_equal(image, gray8)
+    # Poses equal, velocities from the poses' slope.
+    for a, b in zip(ds.frames, euroc.frames):
+        np.testing.assert_allclose(a.world_from_cam.matrix(), b.world_from_cam.matrix(), atol=1e-9)
