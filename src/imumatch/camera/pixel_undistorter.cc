@@ -185,6 +185,52 @@ void NewtonRunPortable(const NewtonArgs& a, int n, const double* us, const doubl
   NewtonRun(a, n, us, vs, out_x, out_y);
 }
 #endif
+// The equidistant lens's radial table for a run of points inside it: x_ideal = g(rho) x_d on the
+// normalised plane, g by cubic Hermite interpolation (ToIdealInPlace's arithmetic), over arrays
+// so that the compiler vectorises it (the table reads become gathers).
+struct RadialArgs {
+  double fx, fy, cx, cy, step, inv_step;
+  const double* g;   // g at rho = k step
+  const double* dg;  // its derivative
+};
+[[gnu::always_inline]] inline void RadialRun(const RadialArgs& args, int n,
+                                             const double* __restrict us,
+                                             const double* __restrict vs, double* __restrict out_x,
+                                             double* __restrict out_y) {
+  const double fx = args.fx, fy = args.fy, cx = args.cx, cy = args.cy;
+  const double step = args.step, inv_step = args.inv_step;
+  const double* __restrict g = args.g;
+  const double* __restrict dg = args.dg;
+  for (int i = 0; i < n; ++i) {
+    const double xd = (us[i] - cx) / fx, yd = (vs[i] - cy) / fy;
+    const double s = std::sqrt(xd * xd + yd * yd) * inv_step;
+    const int k = static_cast<int>(s);
+    const double t = s - k, t2 = t * t, t3 = t2 * t;
+    const double gi = (2 * t3 - 3 * t2 + 1) * g[k] + (t3 - 2 * t2 + t) * step * dg[k] +
+                      (-2 * t3 + 3 * t2) * g[k + 1] + (t3 - t2) * step * dg[k + 1];
+    out_x[i] = fx * gi * xd + cx;
+    out_y[i] = fy * gi * yd + cy;
+  }
+}
+using RadialRunFn = void (*)(const RadialArgs&, int, const double*, const double*, double*,
+                             double*);
+void RadialRunPortable(const RadialArgs& a, int n, const double* us, const double* vs,
+                       double* out_x, double* out_y) {
+  RadialRun(a, n, us, vs, out_x, out_y);
+}
+#if defined(__x86_64__) || defined(__i386__)
+[[gnu::target("avx2,fma")]] void RadialRunAvx2(const RadialArgs& a, int n, const double* us,
+                                               const double* vs, double* out_x, double* out_y) {
+  RadialRun(a, n, us, vs, out_x, out_y);
+}
+[[gnu::target("avx512f,avx512dq,avx512vl")]] void RadialRunAvx512(const RadialArgs& a, int n,
+                                                                  const double* us,
+                                                                  const double* vs, double* out_x,
+                                                                  double* out_y) {
+  RadialRun(a, n, us, vs, out_x, out_y);
+}
+#endif
+
 bool CpuHas(PixelUndistorter::Path path) {
   switch (path) {
     case PixelUndistorter::Path::kAuto:
@@ -216,6 +262,51 @@ NewtonRunFn SelectNewtonRun(PixelUndistorter::Path path) {
   return &NewtonRunPortable;
 }
 
+RadialRunFn SelectRadialRun(PixelUndistorter::Path path) {
+  using Path = PixelUndistorter::Path;
+  if (path == Path::kAuto) {
+    path = CpuHas(Path::kAvx512) ? Path::kAvx512
+                                 : (CpuHas(Path::kAvx2) ? Path::kAvx2 : Path::kPortable);
+  }
+#if defined(__x86_64__) || defined(__i386__)
+  if (path == Path::kAvx512) return &RadialRunAvx512;
+  if (path == Path::kAvx2) return &RadialRunAvx2;
+#endif
+  return &RadialRunPortable;
+}
+
+// ToIdealInPlace's frame: runs of up to 64 points loaded as doubles into us / vs; kernel(us, vs,
+// len, out_x, out_y, outside, &num_outside) marks the points it cannot take (replacing them in
+// us / vs meanwhile) and maps the run; the results are stored back as floats, the marked points
+// through fallback(u, v) from their original values.
+template <typename Kernel, typename Fallback>
+void ForEachRun(float* xy, int n, int stride, Kernel&& kernel, Fallback&& fallback) {
+  constexpr int kRun = 64;
+  double us[kRun], vs[kRun], original_u[kRun], original_v[kRun], out_x[kRun], out_y[kRun];
+  int outside[kRun];
+  for (int begin = 0; begin < n; begin += kRun) {
+    const int len = std::min(kRun, n - begin);
+    for (int i = 0; i < len; ++i) {
+      const float* p = xy + static_cast<size_t>(begin + i) * stride;
+      original_u[i] = us[i] = p[0];
+      original_v[i] = vs[i] = p[1];
+    }
+    int num_outside = 0;
+    kernel(us, vs, len, out_x, out_y, outside, &num_outside);
+    for (int i = 0; i < len; ++i) {
+      float* p = xy + static_cast<size_t>(begin + i) * stride;
+      p[0] = static_cast<float>(out_x[i]);
+      p[1] = static_cast<float>(out_y[i]);
+    }
+    for (int o = 0; o < num_outside; ++o) {
+      float* p = xy + static_cast<size_t>(begin + outside[o]) * stride;
+      const Eigen::Vector2d ideal = fallback(original_u[outside[o]], original_v[outside[o]]);
+      p[0] = static_cast<float>(ideal.x());
+      p[1] = static_cast<float>(ideal.y());
+    }
+  }
+}
+
 }  // namespace
 
 bool PixelUndistorter::Supported(Path path) { return CpuHas(path); }
@@ -224,30 +315,35 @@ void PixelUndistorter::ToIdealInPlace(float* xy, int n, int stride, Path path) c
   IMUMATCH_CHECK(n >= 0 && stride >= 2, "n=" << n << " stride=" << stride);
   IMUMATCH_CHECK(CpuHas(path), "this CPU lacks the instruction set of the requested path");
   if (identity_ || n == 0) return;
+  const auto to_ideal = [this](double u, double v) { return ToIdeal(Eigen::Vector2d(u, v)); };
   if (camera_.model == DistortionModel::kEquidistant) {
     // Radial: the ideal point is g(rho) times the distorted one on the normalised plane, g from
-    // the table by cubic Hermite interpolation (no Newton step, no transcendental function).
-    // Beyond the table (and NaN): ToIdeal.
-    const double fx = camera_.fx, fy = camera_.fy, cx = camera_.cx, cy = camera_.cy;
-    const int last = static_cast<int>(radial_g_.size()) - 2;
-    for (int i = 0; i < n; ++i) {
-      float* p = xy + static_cast<size_t>(i) * stride;
-      const double xd = (p[0] - cx) / fx, yd = (p[1] - cy) / fy;
-      const double s = std::sqrt(xd * xd + yd * yd) * inv_radial_step_;
-      if (!(s < last)) {
-        const Eigen::Vector2d ideal = ToIdeal(Eigen::Vector2d(p[0], p[1]));
-        p[0] = static_cast<float>(ideal.x());
-        p[1] = static_cast<float>(ideal.y());
-        continue;
-      }
-      const int k = static_cast<int>(s);
-      const double t = s - k, t2 = t * t, t3 = t2 * t;
-      const double g =
-          (2 * t3 - 3 * t2 + 1) * radial_g_[k] + (t3 - 2 * t2 + t) * radial_step_ * radial_dg_[k] +
-          (-2 * t3 + 3 * t2) * radial_g_[k + 1] + (t3 - t2) * radial_step_ * radial_dg_[k + 1];
-      p[0] = static_cast<float>(fx * g * xd + cx);
-      p[1] = static_cast<float>(fy * g * yd + cy);
-    }
+    // the table by cubic Hermite interpolation (no Newton step, no transcendental function), in
+    // runs of 64 like the radial-tangential loop below. Beyond the table (and NaN): ToIdeal.
+    static const RadialRunFn best_radial = SelectRadialRun(Path::kAuto);
+    const RadialRunFn radial_run = path == Path::kAuto ? best_radial : SelectRadialRun(path);
+    const RadialArgs args{camera_.fx,   camera_.fy,       camera_.cx,       camera_.cy,
+                          radial_step_, inv_radial_step_, radial_g_.data(), radial_dg_.data()};
+    // Inside the table: rho below its last interval's start (squared: no root here; a point
+    // that rounds onto that start still has both its nodes, the table holds one more).
+    const double last_rho = (static_cast<double>(radial_g_.size()) - 2.0) * radial_step_;
+    const double max_rho2 = last_rho * last_rho;
+    const double inv_fx = 1.0 / camera_.fx, inv_fy = 1.0 / camera_.fy;
+    ForEachRun(
+        xy, n, stride,
+        [&](double* us, double* vs, int len, double* out_x, double* out_y, int* outside,
+            int* num_outside) {
+          for (int i = 0; i < len; ++i) {
+            const double xd = (us[i] - camera_.cx) * inv_fx, yd = (vs[i] - camera_.cy) * inv_fy;
+            if (!(xd * xd + yd * yd < max_rho2)) {  // (and NaN)
+              outside[(*num_outside)++] = i;
+              us[i] = camera_.cx;  // the axis meanwhile
+              vs[i] = camera_.cy;
+            }
+          }
+          radial_run(args, len, us, vs, out_x, out_y);
+        },
+        to_ideal);
     return;
   }
   static const NewtonRunFn best = SelectNewtonRun(Path::kAuto);
@@ -267,39 +363,21 @@ void PixelUndistorter::ToIdealInPlace(float* xy, int n, int stride, Path path) c
                         cols_,
                         reinterpret_cast<const double*>(table_.data())};
   const double last_col = cols_ - 1, last_row = rows_ - 1;
-  constexpr int kRun = 64;
-  double us[kRun], vs[kRun], out_x[kRun], out_y[kRun];
-  int outside[kRun];
-  double outside_u[kRun], outside_v[kRun];
-  for (int begin = 0; begin < n; begin += kRun) {
-    const int len = std::min(kRun, n - begin);
-    int num_outside = 0;
-    for (int i = 0; i < len; ++i) {
-      const float* p = xy + static_cast<size_t>(begin + i) * stride;
-      us[i] = p[0];
-      vs[i] = p[1];
-      const double gx = (us[i] - origin_) * inv_cell_, gy = (vs[i] - origin_) * inv_cell_;
-      if (!(gx >= 0.0 && gy >= 0.0 && gx < last_col && gy < last_row)) {
-        // (And NaN.) ToIdeal's path below; a node of the table meanwhile.
-        outside[num_outside] = i;
-        outside_u[num_outside] = us[i];
-        outside_v[num_outside++] = vs[i];
-        us[i] = vs[i] = origin_;
-      }
-    }
-    newton_run(args, len, us, vs, out_x, out_y);
-    for (int i = 0; i < len; ++i) {
-      float* p = xy + static_cast<size_t>(begin + i) * stride;
-      p[0] = static_cast<float>(out_x[i]);
-      p[1] = static_cast<float>(out_y[i]);
-    }
-    for (int o = 0; o < num_outside; ++o) {
-      float* p = xy + static_cast<size_t>(begin + outside[o]) * stride;
-      const Eigen::Vector2d ideal = ToIdeal(Eigen::Vector2d(outside_u[o], outside_v[o]));
-      p[0] = static_cast<float>(ideal.x());
-      p[1] = static_cast<float>(ideal.y());
-    }
-  }
+  ForEachRun(
+      xy, n, stride,
+      [&](double* us, double* vs, int len, double* out_x, double* out_y, int* outside,
+          int* num_outside) {
+        for (int i = 0; i < len; ++i) {
+          const double gx = (us[i] - origin_) * inv_cell_, gy = (vs[i] - origin_) * inv_cell_;
+          if (!(gx >= 0.0 && gy >= 0.0 && gx < last_col && gy < last_row)) {
+            // (And NaN.) ToIdeal's path afterwards; a node of the table meanwhile.
+            outside[(*num_outside)++] = i;
+            us[i] = vs[i] = origin_;
+          }
+        }
+        newton_run(args, len, us, vs, out_x, out_y);
+      },
+      to_ideal);
 }
 
 }  // namespace imumatch

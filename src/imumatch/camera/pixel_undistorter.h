@@ -16,7 +16,8 @@ namespace imumatch {
 // analytic Jacobian finishes it (the error squares: below 1e-6 px for EuRoC's k1 = -0.28 lens).
 // The table is built once per camera. Pixels outside the image fall back to the iterative inverse.
 // An equidistant lens takes two Newton steps (its ideal pixels curve more at the corners) and, in
-// ToIdealInPlace, a radial table (g = tan(theta) / rho by cubic Hermite interpolation).
+// ToIdealInPlace, a radial table (g = tan(theta) / rho by cubic Hermite interpolation), its loop
+// vectorised the same way.
 // For a camera without distortion every call is the identity.
 class PixelUndistorter {
  public:
