@@ -14,6 +14,7 @@
 #include "imumatch/eval/frame_source.h"
 #include "imumatch/eval/track_run.h"
 #include "imumatch/features/feature_factory.h"
+#include "imumatch/frontend/front_end.h"
 #include "imumatch/io/dataset.h"
 #include "imumatch/io/pose_pair.h"
 #include "imumatch/sim/synthetic_sequence.h"
@@ -57,9 +58,105 @@ py::dict FrameDict(const TrackFrameRecord& f, const std::vector<double>& thresho
   return d;
 }
 
+// A FrontEndResult as Python values: matches as an M x 2 int32 array (the previous frame's
+// keypoint, this frame's), their refined positions in this frame (M x 2, NaN when not refined).
+py::dict ResultDict(const FrontEndResult& r) {
+  py::dict d;
+  d["t_ns"] = r.t_ns;
+  d["status"] = std::string(ToString(r.status));
+  d["event"] = r.event;
+  d["keypoints"] = KeypointsToArray(r.keypoints);
+  py::array_t<int32_t> pairs({static_cast<py::ssize_t>(r.matches.size()), py::ssize_t{2}});
+  py::array_t<float> refined({static_cast<py::ssize_t>(r.matches.size()), py::ssize_t{2}});
+  auto p = pairs.mutable_unchecked<2>();
+  auto q = refined.mutable_unchecked<2>();
+  for (size_t i = 0; i < r.matches.size(); ++i) {
+    const auto k = static_cast<py::ssize_t>(i);
+    p(k, 0) = r.matches[i].query_idx;
+    p(k, 1) = r.matches[i].train_idx;
+    q(k, 0) = r.matches[i].refined_uv_b.x();
+    q(k, 1) = r.matches[i].refined_uv_b.y();
+  }
+  d["matches"] = pairs;
+  d["refined_uv"] = refined;
+  d["matches_pass1"] = r.matches_pass1.size();
+  d["second_pass"] = r.second_pass;
+  d["pose_from_depth"] = r.pose_from_depth;
+  d["cam_from_prev"] = r.cam_from_prev;
+  d["world_from_cam"] = r.has_state ? py::cast(r.world_from_cam) : py::object(py::none());
+  d["velocity_in_world"] = r.velocity_in_world;
+  d["velocity_sigma"] = r.velocity_sigma;
+  d["total_ms"] = r.total_ms;
+  return d;
+}
+
 }  // namespace
 
 void BindTrack(py::module_& m) {
+  py::class_<FrontEnd>(m, "FrontEnd", R"(The front end one frame at a time, as `track` runs it over
+a dataset: feed the IMU samples in time order (add_imu, at least up to each frame's time), then
+the frame (process). It initialises gravity and the gyro bias from the first still_s seconds of
+IMU, predicts each frame's keypoints from the IMU and the previous frame, matches them (guided,
+or brute force as the fallback), fits the motion and keeps the estimated pose.)")
+      .def(py::init([](const PinholeCamera& camera, const ImuParams& imu_params,
+                       const Rigid3d& cam_from_imu, const std::string& detector, int max_keypoints,
+                       bool hybrid, bool second_pass, double still_s) {
+             FrontEndOptions o;
+             o.features.kind = ParseDetectorKind(detector);
+             o.features.max_keypoints = max_keypoints;
+             o.hybrid = hybrid;
+             o.second_pass = second_pass;
+             o.still_s = still_s;
+             o.Check();
+             return std::make_unique<FrontEnd>(camera, imu_params, cam_from_imu, o);
+           }),
+           py::arg("camera"), py::arg("imu_params"), py::arg("cam_from_imu"),
+           py::arg("detector") = "orb", py::arg("max_keypoints") = 1000, py::arg("hybrid") = false,
+           py::arg("second_pass") = true, py::arg("still_s") = 0.5,
+           "camera: PinholeCamera; imu_params: ImuParams (noise model); cam_from_imu: Rigid3d.")
+      .def(
+          "add_imu",
+          [](FrontEnd& fe, int64_t t_ns, const Eigen::Vector3d& gyro_rad_s,
+             const Eigen::Vector3d& accel_m_s2) {
+            ImuSample s;
+            s.t_ns = t_ns;
+            s.gyro_rad_s = gyro_rad_s;
+            s.accel_m_s2 = accel_m_s2;
+            fe.AddImu(s);
+          },
+          py::arg("t_ns"), py::arg("gyro_rad_s"), py::arg("accel_m_s2"),
+          "One IMU sample (int64 ns, rad/s, m/s^2), in time order; raises on a NaN, a sample "
+          "out of order or a duplicate.")
+      .def(
+          "process",
+          [](FrontEnd& fe, int64_t t_ns, const py::handle& image, const py::handle& depth) {
+            FrontEndFrame f;
+            f.t_ns = t_ns;
+            const MatView image_view = ArrayToMat(image, "image");
+            MatView depth_view;
+            if (!depth.is_none()) depth_view = ArrayToMat(depth, "depth");
+            f.image = image_view.mat;
+            f.depth = depth_view.mat;
+            FrontEndResult r;
+            {
+              py::gil_scoped_release release;
+              r = fe.Process(f);
+            }
+            return ResultDict(r);
+          },
+          py::arg("t_ns"), py::arg("image"), py::arg("depth") = py::none(),
+          R"(One frame: t_ns (int64, after the previous frame's), image (uint8 gray or BGR),
+depth (uint16 raw, camera.depth_scale units per metre, 0 = none; or None). Returns {"status"
+('first', 'guided' or 'brute_force'), "event", "keypoints" (N x 7 as extract_features), "matches"
+(M x 2 int32: the previous frame's keypoint, this frame's), "refined_uv" (M x 2, the matches'
+sub-pixel positions in this frame, NaN when not refined), "matches_pass1", "second_pass",
+"cam_from_prev", "world_from_cam" (None while the IMU initialises), "velocity_in_world",
+"velocity_sigma", "total_ms"}. Raises ValueError for an image of another size than the camera's,
+an empty image, or a time not after the previous frame's.)")
+      .def_property_readonly(
+          "notes", [](const FrontEnd& fe) { return fe.notes(); },
+          "What the front end noted (initialisation, bias), one line each.");
+
   m.def(
       "track",
       [](const py::object& dataset, const std::string& detector, int max_keypoints, bool hybrid,

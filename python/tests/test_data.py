@@ -250,3 +250,41 @@ def test_a_tum_vi_like_folder_loads_with_kalibr_files_mocap_poses_and_16_bit_fra
     # Poses equal, velocities from the poses' slope.
     for a, b in zip(ds.frames, euroc.frames):
         np.testing.assert_allclose(a.world_from_cam.matrix(), b.world_from_cam.matrix(), atol=1e-9)
+
+
+def test_the_per_frame_front_end_equals_track_over_the_same_walk():
+    # Fed as `track` feeds it (the IMU up to one sample past each frame, then the frame), the
+    # per-frame FrontEnd gives the same statuses, match counts and poses as imumatch.track.
+    times = [0.6 + k / 30.0 for k in range(8)]
+    seq = imumatch.make_synthetic_sequence("walk", frame_times_s=times)
+    ref = imumatch.track(seq, detector="orb", still_s=0.5)["frames"]
+    fe = imumatch.FrontEnd(seq.camera, seq.imu_params, seq.cam_from_imu, detector="orb",
+                           still_s=0.5)
+    imu = seq.imu
+    t, gyro, accel = imu.t_ns, imu.gyro, imu.accel
+    next_imu = 0
+    for k, frame in enumerate(seq.frames):
+        while next_imu < len(t):
+            fe.add_imu(int(t[next_imu]), gyro[next_imu], accel[next_imu])
+            next_imu += 1
+            if t[next_imu - 1] >= frame.t_ns:
+                break
+        r = fe.process(frame.t_ns, cv2.cvtColor(frame.rgb, cv2.COLOR_BGR2GRAY), frame.depth)
+        assert r["status"] == ref[k]["status"]
+        assert len(r["matches"]) == ref[k]["matches"]
+        assert r["matches"].dtype == np.int32 and r["matches"].shape[1] == 2
+        if k > 0:
+            # Indices into the previous frame's and this frame's keypoints.
+            assert r["matches"][:, 1].max() < len(r["keypoints"])
+            np.testing.assert_allclose(r["world_from_cam"].matrix(),
+                                       ref[k]["world_from_cam"].matrix(), atol=1e-9)
+            # And the estimated motion is the exact one to millimetres.
+            truth = frame.world_from_cam.inverse() * seq.frames[k - 1].world_from_cam
+            err = r["cam_from_prev"].inverse() * truth
+            assert np.linalg.norm(err.matrix()[:3, 3]) < 0.003
+    assert any("gravity" in n for n in fe.notes)
+    # Bad input: a frame not after the previous one, an image of another size.
+    with pytest.raises(ValueError):
+        fe.process(seq.frames[-1].t_ns, cv2.cvtColor(seq.frames[-1].rgb, cv2.COLOR_BGR2GRAY))
+    with pytest.raises(ValueError):
+        fe.process(seq.frames[-1].t_ns + 10**8, np.zeros((10, 10), np.uint8))
