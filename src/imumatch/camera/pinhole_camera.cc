@@ -107,7 +107,8 @@ void PinholeCamera::Check() const {
       std::ostringstream m;
       m << "equidistant lens k=[" << distortion[0] << " " << distortion[1] << " " << distortion[2]
         << " " << distortion[3] << "]: the image radius stops growing at " << theta * 180.0 / kPi
-        << " deg from the optical axis, before the image corners (two rays would share a pixel)";
+        << " deg from the optical axis, before the image corners and the field of view's edge ("
+        << kMaxFieldAngleDeg << " deg): two rays would share a pixel";
       throw InvalidArgument(m.str());
     }
     if (radius >= corner) return;
