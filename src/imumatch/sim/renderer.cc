@@ -316,6 +316,8 @@ RenderedView RenderView(const Scene& scene, const PinholeCamera& camera,
         rgb[u] = cv::Vec3b(0, 0, 0);
         depth[u] = 0;
         ids[u] = -2;
+        if (noise.add_noise) gauss(rng);  // the same draws as every other pixel's
+        if (noise.add_holes) uniform(rng);
         continue;
       }
       const FrameCaster::Hit hit = caster.Cast(ray.u, ray.v, ray.step_u, ray.step_v, colour);
