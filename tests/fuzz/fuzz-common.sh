@@ -91,6 +91,7 @@ fuzz_make_seeds() {
   head -n 40 "$mh/depth0/data.csv" | seed euroc_depth_list mh05
   seed euroc_depth_yaml mh05 <"$mh/depth0/sensor.yaml"
   head -n 15 "$gt" | seed euroc_groundtruth mh05
+  head -n 15 "$gt" | cut -d, -f1-8 | seed euroc_poses mh05
   head -n 15 "$gt" | named_seed euroc_dataset gt_mh05 state_groundtruth_estimate0/data.csv
   head -n 4 "$mh/depth0/data.csv" | named_seed euroc_dataset depth_mh05 depth0/data.csv
   named_seed euroc_dataset depthyaml_mh05 depth0/sensor.yaml <"$mh/depth0/sensor.yaml"
