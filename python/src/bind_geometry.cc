@@ -53,12 +53,6 @@ void Put(double* out, const V& v) {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-Eigen::Vector3d Vec3(const py::handle& h, const char* what) {
-  const auto a = Points::ensure(h);
-  if (!a || a.size() != 3) throw InvalidArgument(std::string(what) + ": expected 3 values");
-  return Eigen::Vector3d(a.data()[0], a.data()[1], a.data()[2]);
-}
-
 }  // namespace
 
 void BindGeometry(py::module_& m) {
@@ -303,11 +297,7 @@ Push rejects unsorted or duplicate timestamps, non-finite values and gaps above 
       .def(
           "push",
           [](ImuBuffer& b, int64_t t_ns, const py::handle& gyro, const py::handle& accel) {
-            ImuSample s;
-            s.t_ns = t_ns;
-            s.gyro_rad_s = Vec3(gyro, "gyro");
-            s.accel_m_s2 = Vec3(accel, "accel");
-            b.Push(s, "python");
+            b.Push(ImuSampleFromPython(t_ns, gyro, accel), "python");
           },
           py::arg("t_ns"), py::arg("gyro"), py::arg("accel"), "Appends one sample.")
       .def_static(

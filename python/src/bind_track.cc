@@ -116,13 +116,9 @@ or brute force as the fallback), fits the motion and keeps the estimated pose.)"
            "camera: PinholeCamera; imu_params: ImuParams (noise model); cam_from_imu: Rigid3d.")
       .def(
           "add_imu",
-          [](FrontEnd& fe, int64_t t_ns, const Eigen::Vector3d& gyro_rad_s,
-             const Eigen::Vector3d& accel_m_s2) {
-            ImuSample s;
-            s.t_ns = t_ns;
-            s.gyro_rad_s = gyro_rad_s;
-            s.accel_m_s2 = accel_m_s2;
-            fe.AddImu(s);
+          [](FrontEnd& fe, int64_t t_ns, const py::handle& gyro_rad_s,
+             const py::handle& accel_m_s2) {
+            fe.AddImu(ImuSampleFromPython(t_ns, gyro_rad_s, accel_m_s2));
           },
           py::arg("t_ns"), py::arg("gyro_rad_s"), py::arg("accel_m_s2"),
           "One IMU sample (int64 ns, rad/s, m/s^2), in time order; raises on a NaN, a sample "

@@ -163,4 +163,17 @@ EvalSource SourceFromPython(const py::object& dataset, const std::string& imu_mo
   return MakeDiskSource(LoadDatasetOrPosePair(dataset.cast<std::string>(), options));
 }
 
+ImuSample ImuSampleFromPython(int64_t t_ns, const py::handle& gyro, const py::handle& accel) {
+  const auto vec3 = [](const py::handle& h, const char* what) {
+    const auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(h);
+    if (!a || a.size() != 3) throw InvalidArgument(std::string(what) + ": expected 3 values");
+    return Eigen::Vector3d(a.data()[0], a.data()[1], a.data()[2]);
+  };
+  ImuSample s;
+  s.t_ns = t_ns;
+  s.gyro_rad_s = vec3(gyro, "gyro");
+  s.accel_m_s2 = vec3(accel, "accel");
+  return s;
+}
+
 }  // namespace imumatch::python

@@ -10,6 +10,7 @@
 #include <pybind11/pybind11.h>
 #include <opencv2/core.hpp>
 
+#include "imumatch/core/types.h"
 #include "imumatch/eval/frame_source.h"
 #include "imumatch/matching/match_types.h"
 
@@ -29,6 +30,10 @@ MatView ArrayToMat(const py::handle& object, const char* what);
 // A NumPy array that owns a copy-free reference to the Mat's buffer (the Mat is moved into a
 // capsule). An empty Mat gives an empty array of shape (0,) or (0, cols).
 py::array MatToArray(cv::Mat mat);
+
+// One IMU sample from Python values: gyro (rad/s) and accel (m/s^2) as any 3 numbers (a list, a
+// NumPy array); InvalidArgument naming which when one is not 3 values.
+ImuSample ImuSampleFromPython(int64_t t_ns, const py::handle& gyro, const py::handle& accel);
 
 // Keypoints: either a list of cv2.KeyPoint-like objects (pt, size, angle, response, octave,
 // class_id) or an N x 2 / N x 7 array with columns x, y, size, angle, response, octave, class_id.
