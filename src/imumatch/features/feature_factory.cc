@@ -51,6 +51,11 @@ class FastBrief : public cv::Feature2D {
   int max_keypoints_;
 };
 
+// cv::SIFT with options' thresholds and at most `cap` keypoints (0: no cap).
+cv::Ptr<cv::Feature2D> CreateSift(const FeatureOptions& options, int cap) {
+  return cv::SIFT::create(cap, 3, options.sift_contrast_threshold, options.sift_edge_threshold);
+}
+
 }  // namespace
 
 DetectorKind ParseDetectorKind(std::string_view name) {
@@ -132,8 +137,7 @@ cv::Ptr<cv::Feature2D> CreateFeature2D(const FeatureOptions& options) {
   options.Check();
   switch (options.kind) {
     case DetectorKind::kSift:
-      return cv::SIFT::create(options.max_keypoints, 3, options.sift_contrast_threshold,
-                              options.sift_edge_threshold);
+      return CreateSift(options, options.max_keypoints);
     case DetectorKind::kSurf: {
       SurfOptions surf = options.surf;
       surf.max_keypoints = options.max_keypoints;
@@ -162,19 +166,19 @@ Features ExtractFeatures(const cv::Mat& image, const FeatureOptions& options, co
                  "size ("
                      << gray.cols << "x" << gray.rows << "), not " << mask.cols << "x" << mask.rows
                      << " of type " << mask.type());
-  cv::Ptr<cv::Feature2D> feature2d = CreateFeature2D(options);
+  // cv::SIFT caps its keypoints before it applies a mask: with one, it detects without its cap
+  // and the strongest are kept here, as for the kinds without a built-in cap.
+  const bool sift_masked = options.kind == DetectorKind::kSift && !mask.empty();
+  const bool cap_here =
+      sift_masked || options.kind == DetectorKind::kAkaze || options.kind == DetectorKind::kBrisk;
+  cv::Ptr<cv::Feature2D> feature2d =
+      sift_masked ? CreateSift(options, 0) : CreateFeature2D(options);
   Features out;
   std::vector<cv::KeyPoint> keypoints;
   cv::Mat descriptors;
   try {
-    if (options.kind == DetectorKind::kAkaze || options.kind == DetectorKind::kBrisk ||
-        (options.kind == DetectorKind::kSift && !mask.empty())) {
-      // No built-in cap: keep the strongest detections, then describe only those. (cv::SIFT
-      // caps before it applies a mask: with one, it detects without its cap.)
-      if (options.kind == DetectorKind::kSift) {
-        feature2d =
-            cv::SIFT::create(0, 3, options.sift_contrast_threshold, options.sift_edge_threshold);
-      }
+    if (cap_here) {
+      // Keep the strongest detections, then describe only those.
       feature2d->detect(gray, keypoints, mask);
       std::stable_sort(keypoints.begin(), keypoints.end(), ResponseGreater);
       if (static_cast<int>(keypoints.size()) > options.max_keypoints) {
