@@ -27,6 +27,37 @@ struct ImuArgs {
   std::string mode = "so3";
 };
 
+// One line of the table: the IMU's delta rotation between frames i and i + 1 with the bias
+// removed and raw, the ground truth's, the stated sigma; then nav moves on to frame i + 1.
+// Throws OutOfRange when the IMU log has a gap between the frames.
+void PrintPair(const Dataset& d, size_t i, NavState& nav, const ImuBias& bias,
+               const CameraMotionOptions& motion_options) {
+  const int64_t ta = d.frames[i].t_ns, tb = d.frames[i + 1].t_ns;
+  ImuStateAtFrame state;
+  state.world_from_imu = nav.world_from_imu;
+  state.velocity_in_world = nav.velocity_in_world;
+  state.bias = bias;
+  const CameraMotion m =
+      ComputeCameraMotion(d.imu, ta, tb, state, d.imu_params, d.cam_from_imu, motion_options);
+  ImuStateAtFrame raw_state = state;
+  raw_state.bias = ImuBias();
+  const CameraMotion raw =
+      ComputeCameraMotion(d.imu, ta, tb, raw_state, d.imu_params, d.cam_from_imu, motion_options);
+  char gt[32] = "-";
+  if (d.frames[i].world_from_cam && d.frames[i + 1].world_from_cam) {
+    const CameraMotion truth =
+        CameraMotionFromPoses(ta, *d.frames[i].world_from_cam, tb, *d.frames[i + 1].world_from_cam);
+    std::snprintf(gt, sizeof(gt), "%.4f",
+                  RotationAngle(truth.cam_b_from_cam_a.rotation) * kRadToDeg);
+  }
+  const double sigma = std::sqrt(std::max(0.0, m.covariance.topLeftCorner<3, 3>().trace()));
+  std::printf("%5zu %18s %7.2f %12.4f %12.4f %12s %10.4f\n", i, FormatNsAsSeconds(ta).c_str(),
+              NsToSeconds(tb - ta) * 1e3, RotationAngle(m.cam_b_from_cam_a.rotation) * kRadToDeg,
+              RotationAngle(raw.cam_b_from_cam_a.rotation) * kRadToDeg, gt, sigma * kRadToDeg);
+  const ImuPreintegration pim = Preintegrate(d.imu.Slice(ta, tb), bias, d.imu_params);
+  nav = Propagate(nav, pim, d.imu_params.gravity_in_world);
+}
+
 void RunImu(const ImuArgs& a) {
   IMUMATCH_CHECK(a.still_s > 0.0, "--still must be > 0");
   DatasetOptions options;
@@ -44,9 +75,13 @@ void RunImu(const ImuArgs& a) {
   std::printf(
       "still start %.3f s (%d samples): gyro bias %+.5f %+.5f %+.5f rad/s (+- %.1e), "
       "gravity in IMU %+.3f %+.3f %+.3f m/s^2\n",
-      NsToSeconds(t_still1 - t_still0), init.num_samples, init.bias.gyro.x(), init.bias.gyro.y(),
+      NsToSeconds(init.end_ns - t_still0), init.num_samples, init.bias.gyro.x(), init.bias.gyro.y(),
       init.bias.gyro.z(), init.gyro_bias_sigma, init.gravity_in_imu.x(), init.gravity_in_imu.y(),
       init.gravity_in_imu.z());
+  if (init.end_ns < t_still1) {
+    std::printf("(the still period ends at an IMU gap at %s s)\n",
+                FormatNsAsSeconds(init.end_ns).c_str());
+  }
 
   CameraMotionOptions motion_options;
   motion_options.mode = ParseIntegrationMode(a.mode);
@@ -55,55 +90,52 @@ void RunImu(const ImuArgs& a) {
   std::printf("%5s %18s %7s %12s %12s %12s %10s\n", "pair", "t_a [s]", "dt[ms]", "rot[deg]",
               "raw_rot[deg]", "gt_rot[deg]", "sigma[deg]");
   bool nav_valid = false;
-  int printed = 0;
+  int printed = 0, skipped = 0;
   for (size_t i = 0; i + 1 < d.frames.size(); ++i) {
     const int64_t ta = d.frames[i].t_ns, tb = d.frames[i + 1].t_ns;
     if (ta < d.imu.begin_ns() || tb > d.imu.end_ns()) continue;
     if (!nav_valid) {
-      // Propagate from the end of the still period (at rest) to the first frame.
+      // Propagate from the start of the still period (at rest) to the first frame; across a gap
+      // in the log the attitude stays the still period's (the rotations printed do not use it).
       nav.t_ns = t_still0;
       if (ta > t_still0) {
-        const ImuPreintegration pim =
-            Preintegrate(d.imu.Slice(t_still0, ta), init.bias, d.imu_params);
-        nav = Propagate(nav, pim, d.imu_params.gravity_in_world);
+        try {
+          const ImuPreintegration pim =
+              Preintegrate(d.imu.Slice(t_still0, ta), init.bias, d.imu_params);
+          nav = Propagate(nav, pim, d.imu_params.gravity_in_world);
+        } catch (const OutOfRange& e) {
+          std::printf("attitude not propagated to the first frame: %s\n", e.what());
+          nav.t_ns = ta;
+        }
       }
       if (d.frames[i].imu_velocity_in_world)
         nav.velocity_in_world = *d.frames[i].imu_velocity_in_world;
       nav_valid = true;
     }
-    ImuStateAtFrame state;
-    state.world_from_imu = nav.world_from_imu;
-    state.velocity_in_world = nav.velocity_in_world;
-    state.bias = init.bias;
-    const CameraMotion m =
-        ComputeCameraMotion(d.imu, ta, tb, state, d.imu_params, d.cam_from_imu, motion_options);
-    ImuStateAtFrame raw_state = state;
-    raw_state.bias = ImuBias();
-    const CameraMotion raw =
-        ComputeCameraMotion(d.imu, ta, tb, raw_state, d.imu_params, d.cam_from_imu, motion_options);
-    char gt[32] = "-";
-    if (d.frames[i].world_from_cam && d.frames[i + 1].world_from_cam) {
-      const CameraMotion truth = CameraMotionFromPoses(ta, *d.frames[i].world_from_cam, tb,
-                                                       *d.frames[i + 1].world_from_cam);
-      std::snprintf(gt, sizeof(gt), "%.4f",
-                    RotationAngle(truth.cam_b_from_cam_a.rotation) * kRadToDeg);
+    try {
+      PrintPair(d, i, nav, init.bias, motion_options);
+      ++printed;
+    } catch (const OutOfRange& e) {
+      // A gap in the log: the pair is skipped and the state restarts after it (velocity from the
+      // ground truth when the dataset has it; the attitude as before the gap).
+      std::printf("%5zu %18s skipped: %s\n", i, FormatNsAsSeconds(ta).c_str(), e.what());
+      ++skipped;
+      nav.t_ns = tb;
+      if (d.frames[i + 1].imu_velocity_in_world)
+        nav.velocity_in_world = *d.frames[i + 1].imu_velocity_in_world;
     }
-    const double sigma = std::sqrt(std::max(0.0, m.covariance.topLeftCorner<3, 3>().trace()));
-    std::printf("%5zu %18s %7.2f %12.4f %12.4f %12s %10.4f\n", i, FormatNsAsSeconds(ta).c_str(),
-                NsToSeconds(tb - ta) * 1e3, RotationAngle(m.cam_b_from_cam_a.rotation) * kRadToDeg,
-                RotationAngle(raw.cam_b_from_cam_a.rotation) * kRadToDeg, gt, sigma * kRadToDeg);
-    ++printed;
-    const ImuPreintegration pim = Preintegrate(d.imu.Slice(ta, tb), init.bias, d.imu_params);
-    nav = Propagate(nav, pim, d.imu_params.gravity_in_world);
   }
-  if (printed == 0) throw InvalidArgument("no frame interval lies inside the IMU log");
+  if (printed == 0) {
+    throw InvalidArgument("no frame interval lies inside the IMU log" +
+                          std::string(skipped > 0 ? " without a gap" : ""));
+  }
   const size_t intervals = d.frames.size() - 1;
   if (static_cast<size_t>(printed) < intervals) {
     std::printf(
-        "note: %d of %zu frame intervals printed; the others lie outside the IMU log "
-        "(%s .. %s s)\n",
-        printed, intervals, FormatNsAsSeconds(d.imu.begin_ns()).c_str(),
-        FormatNsAsSeconds(d.imu.end_ns()).c_str());
+        "note: %d of %zu frame intervals printed; of the others %d cross a gap in the IMU log and "
+        "%zu lie outside it (%s .. %s s)\n",
+        printed, intervals, skipped, intervals - printed - skipped,
+        FormatNsAsSeconds(d.imu.begin_ns()).c_str(), FormatNsAsSeconds(d.imu.end_ns()).c_str());
   }
   for (const std::string& w : d.warnings) std::printf("warning: %s\n", w.c_str());
 }

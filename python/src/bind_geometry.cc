@@ -285,7 +285,8 @@ K x the undistorted bearing: where the guided matcher predicts and searches.)")
   py::class_<ImuBuffer>(m, "ImuBuffer",
                         R"(Time-ordered IMU samples (int64 nanoseconds, rad/s, m/s^2).
 
-Push rejects unsorted or duplicate timestamps, non-finite values and gaps above max_gap_ns.)")
+Push rejects unsorted or duplicate timestamps and non-finite values; a query (interpolate, a slice
+for preintegration) across a gap longer than max_gap_ns raises OutOfRange.)")
       .def(py::init([](int64_t max_gap_ns) {
              ImuBufferOptions o;
              o.max_gap_ns = max_gap_ns;
@@ -293,7 +294,16 @@ Push rejects unsorted or duplicate timestamps, non-finite values and gaps above 
              return ImuBuffer(o);
            }),
            py::arg("max_gap_ns") = ImuBufferOptions().max_gap_ns,
-           "An empty buffer; pushes with a larger time gap are rejected.")
+           "An empty buffer; no query may cross a longer stretch without samples.")
+      .def(
+          "gaps",
+          [](const ImuBuffer& b) {
+            py::list out;
+            for (const ImuBuffer::Gap& g : b.Gaps())
+              out.append(py::make_tuple(g.begin_ns, g.end_ns));
+            return out;
+          },
+          "The stretches longer than max_gap_ns without a sample, as (begin_ns, end_ns).")
       .def(
           "push",
           [](ImuBuffer& b, int64_t t_ns, const py::handle& gyro, const py::handle& accel) {
@@ -408,11 +418,14 @@ Push rejects unsorted or duplicate timestamps, non-finite values and gaps above 
       .def_readonly("world_from_imu", &StillInitialization::world_from_imu,
                     "Roll and pitch from gravity, yaw zero.")
       .def_readonly("gyro_bias_sigma", &StillInitialization::gyro_bias_sigma, "rad/s")
-      .def_readonly("num_samples", &StillInitialization::num_samples, "Samples used.");
+      .def_readonly("num_samples", &StillInitialization::num_samples, "Samples used.")
+      .def_readonly("end_ns", &StillInitialization::end_ns,
+                    "Where the period ended: t1_ns, or the start of an IMU gap before it.");
   m.def("initialize_from_still", &InitializeFromStill, py::arg("buffer"), py::arg("t0_ns"),
         py::arg("t1_ns"), py::arg("params") = ImuParams(), py::arg("max_gyro_drift") = 0.02,
         py::arg("max_accel_drift") = 0.3,
-        "Gyro bias and gravity direction from a still period; raises InputError if the IMU moved.");
+        "Gyro bias and gravity direction from a still period (up to the first gap in the log); "
+        "raises InputError if the IMU moved.");
 
   py::enum_<IntegrationMode>(m, "IntegrationMode")
       .value("PAPER", IntegrationMode::kPaper,

@@ -107,6 +107,23 @@ def test_still_start_gives_the_gyro_bias():
     assert np.allclose(init.bias.gyro, bias, atol=1e-12)
     assert np.allclose(init.gravity_in_imu, [0, 0, -9.81], atol=1e-9)
     assert init.num_samples == 201
+    assert init.end_ns == 1_000_000_000
+
+
+def test_a_gap_in_the_still_start_ends_it_there():
+    bias = (0.01, -0.02, 0.03)
+    n = 201
+    t_ns = (np.arange(n) * 5_000_000).astype(np.int64)
+    keep = (t_ns <= 400_000_000) | (t_ns >= 500_000_000)  # 100 ms without samples after 0.4 s
+    gyro = np.tile(bias, (n, 1))
+    accel = np.tile([0.0, 0.0, 9.81], (n, 1))
+    buf = imumatch.ImuBuffer.from_arrays(t_ns[keep], gyro[keep], accel[keep])
+    assert buf.gaps() == [(400_000_000, 500_000_000)]
+    with pytest.raises(imumatch.OutOfRange):
+        imumatch.preintegrate(buf, 0, 1_000_000_000)
+    init = imumatch.initialize_from_still(buf, 0, 1_000_000_000)
+    assert init.end_ns == 400_000_000 and init.num_samples == 81
+    assert np.allclose(init.bias.gyro, bias, atol=1e-12)
 
 
 def test_camera_motion_from_poses_is_the_relative_pose():

@@ -255,6 +255,47 @@ TEST_F(CliTest, ImuSaysWhichIntervalsLieOutsideTheLog) {
   EXPECT_NE(r.output.find("note: 14 of 19 frame intervals printed"), std::string::npos) << r.output;
 }
 
+TEST_F(CliTest, ImuGapsShortenTheStillStartAndSkipTheIntervalsAcrossThem) {
+  // The EuRoC excerpt (its IMU log starts still with the first frame) without the samples of
+  // 0.30-0.40 s: 100 ms without IMU inside the 1 s still start and across frames 6-8.
+  const std::string src = testing::DataPath("euroc_v101_excerpt");
+  fs::copy(src, Path("v101"), fs::copy_options::recursive);
+  std::ifstream in(src + "/mav0/imu0/data.csv");
+  std::ofstream out(Path("v101/mav0/imu0/data.csv"), std::ios::trunc);
+  std::string line;
+  int line_number = 0, left_out = 0, first_after_gap = 0;
+  while (std::getline(in, line)) {
+    ++line_number;
+    const std::string t = line.substr(0, 19);
+    if (line[0] != '#' && t >= "1403715273565000000" && t <= "1403715273660000000") {
+      ++left_out;
+      continue;
+    }
+    out << line << "\n";
+    if (line[0] != '#' && t > "1403715273660000000" && first_after_gap == 0) {
+      first_after_gap = line_number - left_out;
+    }
+  }
+  out.close();
+  const CommandResult r = RunCli("imu --euroc " + Path("v101"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  // The still start ends at the gap (0.3 s at 200 Hz: 61 samples) instead of failing.
+  EXPECT_NE(r.output.find("still start 0.300 s (61 samples)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("the still period ends at an IMU gap"), std::string::npos) << r.output;
+  // The two intervals across the gap are skipped, naming the file and line after the gap.
+  const std::string where = "imu0/data.csv:" + std::to_string(first_after_gap) + ": ";
+  EXPECT_NE(r.output.find("skipped: " + Path("v101") + "/mav0/" + where), std::string::npos)
+      << where << "\n"
+      << r.output;
+  EXPECT_NE(r.output.find("note: 17 of 19 frame intervals printed; of the others 2 cross a gap"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("warning: " + Path("v101") + "/mav0/" + where +
+                          "the IMU log has 1 gap longer than 50.0 ms"),
+            std::string::npos)
+      << r.output;
+}
+
 TEST_F(CliTest, SynthOverwriteReplacesFilesAndNeverRewritesAHardLinkedCopy) {
   const std::string args = " --motion left30 --fps 4 --width 64 --out " + Path("seq");
   CommandResult r = RunCli("synth" + args);

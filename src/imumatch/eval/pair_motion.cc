@@ -50,10 +50,11 @@ ImuBiasEstimate EstimateImuBias(const Dataset& dataset, double still_s) {
     out.from_still_start = true;
     out.estimated = true;
     out.gyro_bias_sigma = init.gyro_bias_sigma;
-    out.t_ns = t1;
+    out.t_ns = init.end_ns;
     note << "IMU gyro bias from the still start of the log (" << init.num_samples
          << " samples): " << init.bias.gyro.x() << " " << init.bias.gyro.y() << " "
          << init.bias.gyro.z() << " rad/s (+- " << init.gyro_bias_sigma << ")";
+    if (init.end_ns < t1) note << "; the still period ends at an IMU gap";
   } catch (const InvalidArgument& e) {
     note << "IMU bias: the first " << still_s << " s of the IMU log are not still (" << e.what()
          << "): gyro bias assumed zero";

@@ -100,11 +100,15 @@ void FrontEnd::Initialise(int64_t t_ns, FrontEndResult& result) {
     note << "gravity and gyro bias from the still start of the IMU (" << init.num_samples
          << " samples): bias " << bias_.gyro.x() << " " << bias_.gyro.y() << " " << bias_.gyro.z()
          << " rad/s";
+    if (init.end_ns < t1) note << " (the still period ends at an IMU gap)";
   } catch (const Error& e) {
-    // Not still (or too short): gravity from the mean specific force, no bias estimate.
+    // Not still (or too short): gravity from the mean specific force, no bias estimate. The
+    // recorded samples are averaged directly: a gap in the log does not matter to a mean.
     Eigen::Vector3d f = Eigen::Vector3d::Zero();
-    const std::vector<ImuSample> samples = imu_.Slice(t0, std::max(t1, t0 + 1));
-    for (const ImuSample& s : samples) f += s.accel_m_s2;
+    for (const ImuSample& s : imu_.samples()) {
+      if (s.t_ns > t1 && !f.isZero()) break;
+      f += s.accel_m_s2;
+    }
     world_from_imu = Rigid3d(AttitudeFromGravity(f), Eigen::Vector3d::Zero());
     bias_ = ImuBias();
     gyro_bias_sigma_ = options_.motion.gyro_bias_sigma;

@@ -172,6 +172,31 @@ TEST(FrontEnd, ImuGapAndBlackFrameAreReportedAndTheRunGoesOn) {
   }
 }
 
+TEST(FrontEnd, AnImuGapInTheStillStartShortensItAndTheRunGoesOn) {
+  const SyntheticSequence& seq = Walk();
+  Runner run(seq, Options());
+  run.DropImu(SecondsToNs(0.2), SecondsToNs(0.3));  // 0.1 s without IMU while still
+  bool initialised = false;
+  int guided = 0, later = 0;
+  for (size_t k = 0; k < 30; ++k) {
+    const FrontEndResult r = run.Next(k);
+    if (!initialised && r.status == FrameStatus::kFirst &&
+        r.event.find("waiting") == std::string::npos) {
+      // The gyro bias from the still start up to the gap (0.2 s, 40 samples), not refused.
+      EXPECT_NE(r.event.find("gyro bias from the still start"), std::string::npos) << r.event;
+      EXPECT_NE(r.event.find("ends at an IMU gap"), std::string::npos) << r.event;
+      initialised = true;
+      continue;
+    }
+    if (!initialised) continue;
+    ++later;
+    if (r.status == FrameStatus::kGuided) ++guided;
+  }
+  EXPECT_TRUE(initialised);
+  EXPECT_GT(later, 20);
+  EXPECT_EQ(guided, later);
+}
+
 TEST(FrontEnd, BadFramesAreRefused) {
   const SyntheticSequence& seq = Walk();
   FrontEnd fe(seq.camera, seq.imu_params, seq.cam_from_imu, Options());

@@ -1,6 +1,7 @@
 #include "imumatch/imu/imu_buffer.h"
 
 #include <algorithm>
+#include <iomanip>
 #include <sstream>
 
 #include "imumatch/core/error.h"
@@ -25,7 +26,9 @@ void ImuBuffer::Push(const ImuSample& sample, const std::string& source, int lin
         << FormatNsAsSeconds(samples_.back().t_ns) << " s)";
     throw InputError(source, line, msg.str());
   }
+  if (samples_.empty()) source_ = source;
   samples_.push_back(sample);
+  lines_.push_back(line);
 }
 
 int64_t ImuBuffer::begin_ns() const {
@@ -64,7 +67,7 @@ ImuSample ImuBuffer::Interpolate(int64_t t_ns) const {
   const ImuSample& a = samples_[hi - 1];
   if (a.t_ns == t_ns) return a;
   if (b.t_ns - a.t_ns > options_.max_gap_ns) {
-    throw OutOfRange("IMU query at " + FormatNsAsSeconds(t_ns) + " s falls in a gap " +
+    throw OutOfRange(Where(hi) + "IMU query at " + FormatNsAsSeconds(t_ns) + " s falls in a gap " +
                      Interval(a.t_ns, b.t_ns) + " longer than the allowed " +
                      std::to_string(options_.max_gap_ns / 1000000) + " ms");
   }
@@ -85,17 +88,48 @@ std::vector<ImuSample> ImuBuffer::Slice(int64_t t0_ns, int64_t t1_ns) const {
   const ImuSample last = Interpolate(t1_ns);
   for (size_t i = UpperIndex(t0_ns); i < samples_.size() && samples_[i].t_ns < t1_ns; ++i) {
     if (samples_[i].t_ns - out.back().t_ns > options_.max_gap_ns) {
-      throw OutOfRange("IMU gap " + Interval(out.back().t_ns, samples_[i].t_ns) +
-                       " inside the requested interval " + Interval(t0_ns, t1_ns));
+      throw OutOfRange(GapMessage(i) + " inside the requested interval " + Interval(t0_ns, t1_ns));
     }
     out.push_back(samples_[i]);
   }
-  if (last.t_ns - out.back().t_ns > options_.max_gap_ns) {
-    throw OutOfRange("IMU gap " + Interval(out.back().t_ns, last.t_ns) +
-                     " inside the requested interval " + Interval(t0_ns, t1_ns));
-  }
+  // Interpolate(t1_ns) has refused a t1 inside a gap, so the last stretch is not one.
   out.push_back(last);
   return out;
+}
+
+std::string ImuBuffer::Where(size_t i) const {
+  if (source_.empty()) return "";
+  if (i < lines_.size() && lines_[i] > 0) return source_ + ":" + std::to_string(lines_[i]) + ": ";
+  return source_ + ": ";
+}
+
+std::string ImuBuffer::GapMessage(size_t after) const {
+  const int64_t a = samples_[after - 1].t_ns, b = samples_[after].t_ns;
+  std::ostringstream msg;
+  msg << std::fixed << std::setprecision(1) << Where(after) << "IMU gap " << Interval(a, b) << " ("
+      << static_cast<double>(b - a) * 1e-6 << " ms without a sample, more than the allowed "
+      << static_cast<double>(options_.max_gap_ns) * 1e-6 << " ms)";
+  return msg.str();
+}
+
+std::vector<ImuBuffer::Gap> ImuBuffer::Gaps() const {
+  std::vector<Gap> gaps;
+  for (size_t i = 1; i < samples_.size(); ++i) {
+    if (samples_[i].t_ns - samples_[i - 1].t_ns > options_.max_gap_ns) {
+      gaps.push_back({samples_[i - 1].t_ns, samples_[i].t_ns, lines_[i]});
+    }
+  }
+  return gaps;
+}
+
+int64_t ImuBuffer::GapFreeEnd(int64_t t0_ns, int64_t t1_ns) const {
+  Interpolate(t0_ns);  // throws outside the range or inside a gap
+  for (size_t i = UpperIndex(t0_ns); i < samples_.size() && samples_[i - 1].t_ns < t1_ns; ++i) {
+    if (samples_[i].t_ns - samples_[i - 1].t_ns > options_.max_gap_ns) {
+      return std::min(t1_ns, samples_[i - 1].t_ns);
+    }
+  }
+  return std::min(t1_ns, samples_.back().t_ns);
 }
 
 }  // namespace imumatch

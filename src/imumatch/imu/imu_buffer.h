@@ -39,12 +39,32 @@ class ImuBuffer {
   // (t1 <= t0), or contains a gap longer than max_gap_ns.
   std::vector<ImuSample> Slice(int64_t t0_ns, int64_t t1_ns) const;
 
+  // A stretch between consecutive samples longer than max_gap_ns: no query may cross it. line is
+  // the source line of the sample after the gap (0 when the samples came without lines).
+  struct Gap {
+    int64_t begin_ns = 0, end_ns = 0;
+    int line = 0;
+  };
+  std::vector<Gap> Gaps() const;
+  // The end of the gap-free stretch from t0_ns towards t1_ns: t1_ns, or the start of the first
+  // gap after t0_ns (a still period or an integration can use the samples up to it). Throws
+  // OutOfRange when t0_ns is outside the buffered range or inside a gap.
+  int64_t GapFreeEnd(int64_t t0_ns, int64_t t1_ns) const;
+  // Where the samples came from (the source of the first Push), and "source:line: " for the
+  // sample at index i when its line is known ("source: " otherwise); errors about the samples
+  // start with it.
+  const std::string& source() const { return source_; }
+  std::string Where(size_t i) const;
+
   const ImuBufferOptions& options() const { return options_; }
 
  private:
   size_t UpperIndex(int64_t t_ns) const;  // first sample with t > t_ns
+  std::string GapMessage(size_t after) const;
   ImuBufferOptions options_;
   std::vector<ImuSample> samples_;
+  std::vector<int> lines_;  // per sample, 0 when unknown
+  std::string source_;
 };
 
 }  // namespace imumatch

@@ -71,5 +71,39 @@ TEST(ImuBuffer, QueriesOutsideRangeOrOverGapsFail) {
   EXPECT_NO_THROW(buffer.Slice(50'000'000, 55'000'000));
 }
 
+TEST(ImuBuffer, GapsAreListedWithTheirLineAndEndTheGapFreeStretch) {
+  ImuBufferOptions opt;
+  opt.max_gap_ns = 20'000'000;
+  ImuBuffer buffer(opt);
+  // Lines 2.. of imu.csv; a 40 ms gap before line 6 and a 25 ms one before line 8.
+  const int64_t times_ms[] = {0, 5, 10, 50, 55, 80, 85};
+  const int lines[] = {2, 3, 4, 6, 7, 8, 9};
+  for (int k = 0; k < 7; ++k) buffer.Push(Sample(times_ms[k] * 1'000'000, 0), "imu.csv", lines[k]);
+  const std::vector<ImuBuffer::Gap> gaps = buffer.Gaps();
+  ASSERT_EQ(gaps.size(), 2u);
+  EXPECT_EQ(gaps[0].begin_ns, 10'000'000);
+  EXPECT_EQ(gaps[0].end_ns, 50'000'000);
+  EXPECT_EQ(gaps[0].line, 6);
+  EXPECT_EQ(gaps[1].begin_ns, 55'000'000);
+  EXPECT_EQ(gaps[1].line, 8);
+  // The stretch from t0 ends where the first gap after it starts, or at t1 before it.
+  EXPECT_EQ(buffer.GapFreeEnd(0, 100'000'000), 10'000'000);
+  EXPECT_EQ(buffer.GapFreeEnd(2'000'000, 7'000'000), 7'000'000);
+  EXPECT_EQ(buffer.GapFreeEnd(50'000'000, 100'000'000), 55'000'000);
+  EXPECT_EQ(buffer.GapFreeEnd(80'000'000, 100'000'000), 85'000'000);
+  EXPECT_EQ(buffer.GapFreeEnd(10'000'000, 100'000'000), 10'000'000);
+  EXPECT_THROW(buffer.GapFreeEnd(30'000'000, 100'000'000), OutOfRange);  // inside a gap
+  // A slice over a gap names the file and the line after the gap.
+  try {
+    buffer.Slice(0, 52'000'000);
+    ADD_FAILURE() << "no throw";
+  } catch (const OutOfRange& e) {
+    EXPECT_NE(
+        std::string(e.what()).find("imu.csv:6: IMU gap [0.010000000, 0.050000000] s (40.0 ms"),
+        std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace imumatch

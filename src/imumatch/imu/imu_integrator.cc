@@ -7,6 +7,7 @@
 
 #include "imumatch/core/error.h"
 #include "imumatch/core/so3.h"
+#include "imumatch/core/time.h"
 
 namespace imumatch {
 
@@ -147,9 +148,16 @@ StillInitialization InitializeFromStill(const ImuBuffer& buffer, int64_t t0_ns, 
                                         const ImuParams& params, double max_gyro_drift,
                                         double max_accel_drift) {
   params.Check();
-  const std::vector<ImuSample> samples = buffer.Slice(t0_ns, t1_ns);
+  const int64_t end_ns = buffer.GapFreeEnd(t0_ns, t1_ns);
+  IMUMATCH_CHECK(end_ns > t0_ns, "the still period ends at once: an IMU gap follows "
+                                     << FormatNsAsSeconds(t0_ns) << " s");
+  const std::vector<ImuSample> samples = buffer.Slice(t0_ns, end_ns);
   const int n = static_cast<int>(samples.size());
-  IMUMATCH_CHECK(n >= 20, "a still period needs at least 20 IMU samples, got " << n);
+  IMUMATCH_CHECK(
+      n >= 20, "a still period needs at least 20 IMU samples, got "
+                   << n
+                   << (end_ns < t1_ns ? " before an IMU gap at " + FormatNsAsSeconds(end_ns) + " s"
+                                      : std::string()));
   Eigen::Vector3d mg = Eigen::Vector3d::Zero(), ma = Eigen::Vector3d::Zero();
   for (const ImuSample& s : samples) {
     mg += s.gyro_rad_s;
@@ -187,6 +195,7 @@ StillInitialization InitializeFromStill(const ImuBuffer& buffer, int64_t t0_ns, 
       std::max(std::sqrt(gyro_var), params.gyro_noise_density * std::sqrt(params.rate_hz)) /
       std::sqrt(static_cast<double>(n));
   init.num_samples = n;
+  init.end_ns = end_ns;
   return init;
 }
 

@@ -80,13 +80,15 @@ PaperIntegration IntegratePaper(const std::vector<ImuSample>& samples,
 // the period, so zero-mean vibration (a drone's rotors) is accepted but real motion is not: throws
 // InvalidArgument when a block's mean gyro differs from the overall mean by more than
 // max_gyro_drift (rad/s) or its mean specific force by more than max_accel_drift (m/s^2), or when
-// the period has fewer than 20 samples.
+// the period has fewer than 20 samples. A gap in the log (ImuBuffer::Gaps) ends the period early:
+// the samples before it are used (end_ns says where the period ended).
 struct StillInitialization {
   ImuBias bias;                    // gyro bias estimated; accel bias zero (not observable)
   Eigen::Vector3d gravity_in_imu;  // points down, norm = |params.gravity_in_world|
   Rigid3d world_from_imu;          // roll/pitch from gravity, yaw zero, origin zero
   double gyro_bias_sigma = 0.0;    // standard error of the gyro bias estimate (rad/s)
   int num_samples = 0;
+  int64_t end_ns = 0;  // the period's end: t1_ns, or the start of the first gap before it
 };
 StillInitialization InitializeFromStill(const ImuBuffer& buffer, int64_t t0_ns, int64_t t1_ns,
                                         const ImuParams& params, double max_gyro_drift = 0.02,

@@ -181,6 +181,40 @@ TEST(InitializeFromStill, FindsGyroBiasAndGravity) {
       1e-9);
 }
 
+TEST(InitializeFromStill, AGapInTheLogEndsThePeriodThere) {
+  // Still for 2 s, then moving; 0.1 s of the log missing from 0.8 s on. The period stops at the
+  // gap instead of failing, and the bias comes from the samples before it.
+  ConstantRateTrajectory still(Rigid3d(FromEulerZYX(0.2, -0.1, 1.0), Eigen::Vector3d::Zero()),
+                               Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), 2.0);
+  ImuSimulatorOptions opt;
+  opt.add_bias_walk = false;
+  opt.initial_bias.gyro = Eigen::Vector3d(0.002, -0.021, 0.077);
+  const ImuParams params;
+  ImuBuffer buffer;
+  int64_t last_before_gap = 0;
+  for (const ImuSample& s : SimulateImu(still, params, opt)) {
+    if (s.t_ns > SecondsToNs(0.8) && s.t_ns < SecondsToNs(0.9)) continue;
+    if (s.t_ns <= SecondsToNs(0.8)) last_before_gap = s.t_ns;
+    buffer.Push(s);
+  }
+  EXPECT_THROW(buffer.Slice(0, SecondsToNs(1.5)), OutOfRange);
+  const StillInitialization init = InitializeFromStill(buffer, 0, SecondsToNs(1.5), params);
+  EXPECT_EQ(init.end_ns, last_before_gap);
+  EXPECT_EQ(init.num_samples, static_cast<int>(last_before_gap / 5'000'000) + 1);  // 200 Hz
+  EXPECT_LT((init.bias.gyro - opt.initial_bias.gyro).norm(), 5 * init.gyro_bias_sigma);
+  // Without a gap the period runs to t1.
+  EXPECT_EQ(InitializeFromStill(buffer, SecondsToNs(0.9), SecondsToNs(1.5), params).end_ns,
+            SecondsToNs(1.5));
+  // A gap right at the start leaves too few samples: refused, naming the gap.
+  try {
+    InitializeFromStill(buffer, SecondsToNs(0.75), SecondsToNs(1.5), params);
+    ADD_FAILURE() << "no throw";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("before an IMU gap at 0.800"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(InitializeFromStill, RejectsMotion) {
   ConstantRateTrajectory spin(Rigid3d(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), 2.0);
   SinusoidTrajectory::Params p;

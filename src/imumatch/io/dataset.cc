@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <iomanip>
 #include <map>
 #include <sstream>
 
@@ -538,8 +539,27 @@ Dataset LoadSyntheticDataset(const std::string& root, const DatasetOptions& opti
   return d;
 }
 
-Dataset LoadDataset(const std::string& path, const DatasetOptions& options) {
-  options.Check();
+namespace {
+
+// A loader warning for the gaps in the IMU log: pairs of frames across one get no IMU motion.
+void WarnAboutImuGaps(Dataset& d) {
+  const std::vector<ImuBuffer::Gap> gaps = d.imu.Gaps();
+  if (gaps.empty()) return;
+  const auto it = std::max_element(gaps.begin(), gaps.end(), [](const auto& a, const auto& b) {
+    return a.end_ns - a.begin_ns < b.end_ns - b.begin_ns;
+  });
+  std::ostringstream msg;
+  msg << std::fixed << std::setprecision(1) << d.imu.source();
+  if (gaps.front().line > 0) msg << ":" << gaps.front().line;
+  msg << ": the IMU log has " << gaps.size() << (gaps.size() == 1 ? " gap" : " gaps")
+      << " longer than " << static_cast<double>(d.imu.options().max_gap_ns) * 1e-6
+      << " ms (the first from " << FormatNsAsSeconds(gaps.front().begin_ns) << " s, the longest "
+      << static_cast<double>(it->end_ns - it->begin_ns) * 1e-6
+      << " ms): frames paired across a gap get no IMU motion";
+  d.warnings.push_back(msg.str());
+}
+
+Dataset LoadDatasetOfKind(const std::string& path, const DatasetOptions& options) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path, "dataset folder not found");
   if (!fs::is_directory(path, ec)) throw InputError(path, "dataset path is not a folder");
@@ -550,6 +570,15 @@ Dataset LoadDataset(const std::string& path, const DatasetOptions& options) {
   throw InputError(path,
                    "not a recognised dataset folder: expected sequence.json (imumatch synth), "
                    "rgb.txt (TUM RGB-D) or mav0/ (EuRoC)");
+}
+
+}  // namespace
+
+Dataset LoadDataset(const std::string& path, const DatasetOptions& options) {
+  options.Check();
+  Dataset d = LoadDatasetOfKind(path, options);
+  WarnAboutImuGaps(d);
+  return d;
 }
 
 }  // namespace imumatch

@@ -519,6 +519,29 @@ TEST(DatasetWarnings, AnUnusedAccelerometerFileWithABadRowDoesNotBlock) {
   EXPECT_NE(d.warnings[0].find("accelerometer.txt:2"), std::string::npos) << d.warnings[0];
 }
 
+TEST(DatasetWarnings, GapsInTheImuLogAreSaidWithTheirLine) {
+  TempDir dir;
+  const EurocDepthFolder f = MakeEurocDepthFolder(dir);
+  // Samples every 5 ms from 0.95 s but those of 1.005-1.07 s: 75 ms without one before line 12.
+  std::string imu;
+  for (int i = 0; i <= 40; ++i) {
+    if (i > 10 && i < 25) continue;
+    imu += std::to_string(950000000 + 5000000 * i) + ",0,0,0.1,0,0,9.81\n";
+  }
+  dir.Write("MH_depth/mav0/imu0/data.csv", imu);
+  const Dataset d = LoadDataset(f.root);
+  ASSERT_EQ(d.imu.Gaps().size(), 1u);
+  bool said = false;
+  for (const std::string& w : d.warnings) {
+    if (w.find("imu0/data.csv:12: the IMU log has 1 gap longer than 50.0 ms") !=
+            std::string::npos &&
+        w.find("the longest 75.0 ms") != std::string::npos) {
+      said = true;
+    }
+  }
+  EXPECT_TRUE(said) << ::testing::PrintToString(d.warnings);
+}
+
 TEST(DatasetWarnings, ASynthFolderWithoutSequenceJsonIsSaid) {
   testing::TempDir dir;
   WriteTumFolder(dir, 4, 4);
