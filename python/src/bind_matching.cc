@@ -25,11 +25,6 @@ namespace imumatch::python {
 
 namespace {
 
-// Predictions in ideal pixels, returned as arrays.
-struct Predictions {
-  std::vector<KeypointPrediction> items;
-};
-
 // A matcher's output, plus the guided matcher's predictions (empty for the baselines).
 struct PyMatchResult {
   MatchResult result;

@@ -13,6 +13,7 @@
 #include "imumatch/core/types.h"
 #include "imumatch/eval/frame_source.h"
 #include "imumatch/matching/match_types.h"
+#include "imumatch/matching/predictor.h"
 
 namespace imumatch::python {
 
@@ -39,6 +40,12 @@ ImuSample ImuSampleFromPython(int64_t t_ns, const py::handle& gyro, const py::ha
 // class_id) or an N x 2 / N x 7 array with columns x, y, size, angle, response, octave, class_id.
 std::vector<cv::KeyPoint> ToKeypoints(const py::handle& object);
 py::array_t<double> KeypointsToArray(const std::vector<cv::KeyPoint>& keypoints);
+
+// Per-keypoint predictions in ideal pixels: Python's `Predictions` (bound in bind_matching.cc,
+// returned by predict_keypoints, match_guided and track_klt).
+struct Predictions {
+  std::vector<KeypointPrediction> items;
+};
 
 // The `dataset` argument of evaluate() and track(): a SyntheticSequence (exact truth, in memory),
 // a Dataset, or a path (LoadDatasetOrPosePair with the simulated IMU's model and seed; with

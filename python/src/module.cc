@@ -51,6 +51,7 @@ PYBIND11_MODULE(_imumatch, m) {
 
   imumatch::python::BindGeometry(m);
   imumatch::python::BindMatching(m);
+  imumatch::python::BindKlt(m);
   imumatch::python::BindData(m);
   imumatch::python::BindTrack(m);
 }

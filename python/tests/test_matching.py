@@ -219,3 +219,49 @@ def test_a_fisheye_is_detected_and_matched_within_its_field_of_view():
         assert cam.in_field(kp[:, :2]).mean() > 0.98
     with pytest.raises(ValueError):
         imumatch.extract_features(gray, "orb", 500, mask=mask[:100])
+
+
+def test_klt_tracks_seeded_by_the_imu_land_where_the_exact_poses_put_them():
+    seq, motion, gray_a, gray_b = synthetic_pair()
+    fa, fb = seq.frames
+    kps_a, _ = imumatch.extract_features(gray_a, "orb", 500)
+    predictions = imumatch.predict_keypoints(seq.camera, motion, kps_a, depth_image=fa.depth)
+    seeded = imumatch.track_klt(seq.camera, gray_a, gray_b, kps_a, predictions)
+    unseeded = imumatch.track_opencv_lk(gray_a, gray_b, kps_a)
+    # Independent truth: A's keypoints moved by the exact poses and the rendered depth.
+    gt = imumatch.camera_motion_from_poses(fa.t_ns, fa.world_from_cam, fb.t_ns, fb.world_from_cam)
+    uv_a = kps_a[:, :2]
+    z = fa.depth[np.round(uv_a[:, 1]).astype(int), np.round(uv_a[:, 0]).astype(int)] / 5000.0
+    truth = np.full((len(kps_a), 2), np.nan)
+    ok = z > 0
+    truth[ok] = seq.camera.project(gt.cam_b_from_cam_a.transform(
+        seq.camera.unproject(uv_a[ok], z[ok])))
+    for tracks in (seeded, unseeded):
+        t = tracks["tracked"] & ok
+        assert t.sum() == np.count_nonzero(~np.isnan(tracks["uv_b"][:, 0]) & ok)
+        err = np.linalg.norm(tracks["uv_b"][t] - truth[t], axis=1)
+        assert np.mean(err < 1.0) > 0.95, np.percentile(err, [50, 90, 99])
+        assert tracks["stats"]["tracked"] == int(tracks["tracked"].sum())
+        assert len(tracks["outcomes"]) == len(kps_a)
+        assert tracks["outcomes"].count("tracked") == tracks["stats"]["tracked"]
+    assert seeded["tracked"].sum() > 300
+    # The seeds are the predictions, mapped into the image: near the truth.
+    t = seeded["tracked"] & ok
+    assert np.median(np.linalg.norm(seeded["seed_uv_b"][t] - truth[t], axis=1)) < 2.0
+    assert np.isnan(unseeded["seed_uv_b"]).all()
+
+
+def test_klt_refuses_mismatched_inputs():
+    seq, motion, gray_a, gray_b = synthetic_pair()
+    kps_a, _ = imumatch.extract_features(gray_a, "orb", 200)
+    predictions = imumatch.predict_keypoints(seq.camera, motion, kps_a)
+    with pytest.raises(ValueError, match="predictions for"):
+        imumatch.track_klt(seq.camera, gray_a, gray_b, kps_a[:10], predictions)
+    with pytest.raises(ValueError, match="one size"):
+        imumatch.track_opencv_lk(gray_a, gray_b[:100], kps_a)
+    with pytest.raises(ValueError, match="uint8 gray"):
+        imumatch.track_klt(seq.camera, gray_a.astype(np.float32), gray_b, kps_a, predictions)
+    options = imumatch.KltOptions()
+    options.half_size = 0
+    with pytest.raises(ValueError):
+        imumatch.track_klt(seq.camera, gray_a, gray_b, kps_a, predictions, options)
