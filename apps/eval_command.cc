@@ -271,8 +271,8 @@ void RunEval(const std::string& path, const std::string& camera_file, CommonArgs
   sel.max_pairs = max_pairs;
   const std::vector<FramePair> pairs = SelectFramePairs(source.dataset.frames, sel);
   if (pairs.empty()) {
-    throw InputError(path, "no frame pair to evaluate (" +
-                               std::to_string(source.dataset.frames.size()) + " frames)");
+    throw InputError(
+        path, "no frame pair to evaluate (" + WhyNoFramePairs(source.dataset.frames, sel) + ")");
   }
   std::cerr << "imumatch eval: " << source.dataset.name << " (" << ToString(source.dataset.kind)
             << ", " << source.dataset.frames.size() << " frames, " << pairs.size()

@@ -97,9 +97,8 @@ py::object Evaluate(EvalSource source, const std::vector<std::string>& detectors
   sel.Check();
   const std::vector<FramePair> pairs = SelectFramePairs(source.dataset.frames, sel);
   if (pairs.empty()) {
-    throw InputError(
-        source.dataset.root,
-        "no frame pair to evaluate (" + std::to_string(source.dataset.frames.size()) + " frames)");
+    throw InputError(source.dataset.root, "no frame pair to evaluate (" +
+                                              WhyNoFramePairs(source.dataset.frames, sel) + ")");
   }
   EvaluationResult result;
   ThresholdChoice threshold;

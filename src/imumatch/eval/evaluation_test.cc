@@ -69,6 +69,20 @@ TEST(EvaluationTest, IntervalPairsTakeTheNearestFrame) {
   EXPECT_EQ(p[1].b, 120u);
 }
 
+TEST(EvaluationTest, NoPairSaysWhichRuleLeftNone) {
+  const auto frames = Frames({0.0, 0.1, 0.2, 0.3});
+  PairSelection s;
+  s.interval_s = 2.0;
+  EXPECT_TRUE(SelectFramePairs(frames, s).empty());
+  EXPECT_EQ(WhyNoFramePairs(frames, s),
+            "4 frames over 0.300000000 s, none with a partner 2 s later (--interval)");
+  s.interval_s = 0.0;
+  s.step = 4;
+  EXPECT_TRUE(SelectFramePairs(frames, s).empty());
+  EXPECT_EQ(WhyNoFramePairs(frames, s), "4 frames over 0.300000000 s, fewer than --step 4 + 1");
+  EXPECT_EQ(WhyNoFramePairs(Frames({1.0}), PairSelection()), "1 frame");
+}
+
 TEST(EvaluationTest, ExplicitPairsAreChecked) {
   const auto frames = Frames({0.0, 0.1, 0.2});
   PairSelection s;

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <sstream>
 
 #include "imumatch/core/error.h"
 #include "imumatch/core/time.h"
@@ -48,6 +49,23 @@ std::vector<FramePair> SelectFramePairs(const std::vector<FrameRecord>& frames,
   const size_t step = static_cast<size_t>(selection.step);
   for (size_t a = 0; a + step < n && !full(); a += step) pairs.push_back({a, a + step});
   return pairs;
+}
+
+std::string WhyNoFramePairs(const std::vector<FrameRecord>& frames,
+                            const PairSelection& selection) {
+  std::string why = std::to_string(frames.size()) + (frames.size() == 1 ? " frame" : " frames");
+  if (frames.size() < 2) return why;
+  why += " over " + FormatNsAsSeconds(frames.back().t_ns - frames.front().t_ns) + " s";
+  if (!selection.explicit_pairs.empty()) return why;
+  if (selection.interval_s > 0.0) {
+    std::ostringstream s;
+    s << selection.interval_s;
+    return why + ", none with a partner " + s.str() + " s later (--interval)";
+  }
+  if (static_cast<size_t>(selection.step) >= frames.size()) {
+    why += ", fewer than --step " + std::to_string(selection.step) + " + 1";
+  }
+  return why;
 }
 
 }  // namespace imumatch

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstddef>
+#include <string>
 #include <vector>
 
 #include "imumatch/io/dataset.h"
@@ -26,5 +27,9 @@ struct PairSelection {
 // Throws InvalidArgument for explicit pairs outside the frame list or with a >= b.
 std::vector<FramePair> SelectFramePairs(const std::vector<FrameRecord>& frames,
                                         const PairSelection& selection);
+
+// Why SelectFramePairs found no pair, for an error message: the frame count and span, and which
+// rule left none ("40 frames over 1.3 s, none with a partner 100 s later (--interval)").
+std::string WhyNoFramePairs(const std::vector<FrameRecord>& frames, const PairSelection& selection);
 
 }  // namespace imumatch
