@@ -59,7 +59,7 @@ void PrintPair(const Dataset& d, size_t i, NavState& nav, const ImuBias& bias,
 }
 
 void RunImu(const ImuArgs& a) {
-  IMUMATCH_CHECK(a.still_s > 0.0, "--still must be > 0");
+  IMUMATCH_CHECK(a.still_s >= 0.0, "--still must be >= 0");
   DatasetOptions options;
   options.max_frames = a.max_frames;
   const Dataset d = LoadDataset(a.path, options);
@@ -71,16 +71,27 @@ void RunImu(const ImuArgs& a) {
 
   const int64_t t_still0 = d.imu.begin_ns();
   const int64_t t_still1 = std::min(d.imu.end_ns(), t_still0 + SecondsToNs(a.still_s));
-  const StillInitialization init = InitializeFromStill(d.imu, t_still0, t_still1, d.imu_params);
-  std::printf(
-      "still start %.3f s (%d samples): gyro bias %+.5f %+.5f %+.5f rad/s (+- %.1e), "
-      "gravity in IMU %+.3f %+.3f %+.3f m/s^2\n",
-      NsToSeconds(init.end_ns - t_still0), init.num_samples, init.bias.gyro.x(), init.bias.gyro.y(),
-      init.bias.gyro.z(), init.gyro_bias_sigma, init.gravity_in_imu.x(), init.gravity_in_imu.y(),
-      init.gravity_in_imu.z());
-  if (init.end_ns < t_still1) {
-    std::printf("(the still period ends at an IMU gap at %s s)\n",
-                FormatNsAsSeconds(init.end_ns).c_str());
+  StillInitialization init;
+  try {
+    IMUMATCH_CHECK(a.still_s > 0.0, "--still 0: no still start");
+    init = InitializeFromStill(d.imu, t_still0, t_still1, d.imu_params);
+    std::printf(
+        "still start %.3f s (%d samples): gyro bias %+.5f %+.5f %+.5f rad/s (+- %.1e), "
+        "gravity in IMU %+.3f %+.3f %+.3f m/s^2\n",
+        NsToSeconds(init.end_ns - t_still0), init.num_samples, init.bias.gyro.x(),
+        init.bias.gyro.y(), init.bias.gyro.z(), init.gyro_bias_sigma, init.gravity_in_imu.x(),
+        init.gravity_in_imu.y(), init.gravity_in_imu.z());
+    if (init.end_ns < t_still1) {
+      std::printf("(the still period ends at an IMU gap at %s s)\n",
+                  FormatNsAsSeconds(init.end_ns).c_str());
+    }
+  } catch (const InvalidArgument& e) {
+    // A log that starts in motion (hand-held, an excerpt): the rotations are still integrated,
+    // with the bias left in (the two rotation columns then agree); the attitude, which only the
+    // propagation between frames uses, starts level.
+    std::printf("no still start (%s): gyro bias not estimated (zero)\n", e.what());
+    init = StillInitialization();
+    init.end_ns = t_still0;
   }
 
   CameraMotionOptions motion_options;
@@ -152,7 +163,10 @@ void AddImuCommand(CLI::App& app) {
   auto* dataset = sub->add_option("--dataset", args->path,
                                   "Any dataset folder (TUM RGB-D, EuRoC, imumatch synth)");
   euroc->excludes(dataset);
-  sub->add_option("--still", args->still_s, "Length of the still start (s)")->capture_default_str();
+  sub->add_option("--still", args->still_s,
+                  "Length of the still start (s; 0 = none: the gyro bias is not estimated, as when "
+                  "the log does not start still)")
+      ->capture_default_str();
   sub->add_option("--frames", args->max_frames, "Number of frames to use (0 = all)")
       ->capture_default_str();
   sub->add_option("--mode", args->mode, "Integration mode: so3 or paper")->capture_default_str();

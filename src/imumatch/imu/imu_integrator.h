@@ -83,10 +83,10 @@ PaperIntegration IntegratePaper(const std::vector<ImuSample>& samples,
 // the period has fewer than 20 samples. A gap in the log (ImuBuffer::Gaps) ends the period early:
 // the samples before it are used (end_ns says where the period ended).
 struct StillInitialization {
-  ImuBias bias;                    // gyro bias estimated; accel bias zero (not observable)
-  Eigen::Vector3d gravity_in_imu;  // points down, norm = |params.gravity_in_world|
-  Rigid3d world_from_imu;          // roll/pitch from gravity, yaw zero, origin zero
-  double gyro_bias_sigma = 0.0;    // standard error of the gyro bias estimate (rad/s)
+  ImuBias bias;  // gyro bias estimated; accel bias zero (not observable)
+  Eigen::Vector3d gravity_in_imu = Eigen::Vector3d::Zero();  // points down, norm = |g|
+  Rigid3d world_from_imu;        // roll/pitch from gravity, yaw zero, origin zero
+  double gyro_bias_sigma = 0.0;  // standard error of the gyro bias estimate (rad/s)
   int num_samples = 0;
   int64_t end_ns = 0;  // the period's end: t1_ns, or the start of the first gap before it
 };
