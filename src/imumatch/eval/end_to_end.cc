@@ -28,6 +28,7 @@ std::string EndToEndTiming::Describe() const {
   std::ostringstream out;
   out << std::fixed << std::setprecision(2);
   out << "end-to-end ORB-1000 stream over " << frames << " frames (" << width << "x" << height
+      << (repetitions > 1 ? ", best of " + std::to_string(repetitions) + " passes each" : "")
       << "): sequential OpenCV (decode + ORB + BFMatcher knn/ratio) " << sequential_ms_per_frame
       << " ms/frame, latency " << sequential_latency_ms << " ms; imumatch on " << threads
       << " threads frame by frame (decode image | depth, ORB levels split, IMU + guided) "
@@ -199,6 +200,7 @@ EndToEndTiming MeasureEndToEnd(const EvalSource& source, const EvaluationOptions
   const size_t n = std::min(e2e.max_frames, dataset.frames.size() - e2e.first_frame);
   if (n < 2) return timing;
   timing.frames = static_cast<int>(n);
+  timing.repetitions = e2e.repetitions;
   timing.threads = cv::getNumThreads();
   const double inf = std::numeric_limits<double>::infinity();
   timing.sequential_ms_per_frame = timing.sequential_latency_ms = inf;

@@ -34,6 +34,7 @@ struct EndToEndOptions {
 };
 struct EndToEndTiming {
   int frames = 0;
+  int repetitions = 1;  // passes of each pipeline; the figures are the fastest pass's
   int width = 0, height = 0;
   double sequential_ms_per_frame = 0.0;
   double sequential_latency_ms = 0.0;

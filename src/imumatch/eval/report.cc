@@ -340,6 +340,7 @@ nlohmann::json ReportToJson(const EvaluationResult& result, const ReportContext&
   if (context.end_to_end && context.end_to_end->frames > 0) {
     const EndToEndTiming& e = *context.end_to_end;
     j["end_to_end"] = {{"frames", e.frames},
+                       {"repetitions", e.repetitions},
                        {"width", e.width},
                        {"height", e.height},
                        {"threads", e.threads},
