@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -239,17 +240,37 @@ TEST_F(CliTest, AGroundTruthTimestampJumpIsBadDataOnItsLine) {
   EXPECT_NE(r.output.find("jumps"), std::string::npos) << r.output;
 }
 
+// Copies the EuRoC V1_01 excerpt to dest with the IMU rows whose timestamp (its 19 digits,
+// compared as text) keep() rejects left out; returns the line, in the new data.csv, of the first
+// kept row after the last left-out one (0: none).
+int CopyV101WithImuRows(const std::string& dest,
+                        const std::function<bool(const std::string&)>& keep) {
+  const std::string src = testing::DataPath("euroc_v101_excerpt");
+  fs::copy(src, dest, fs::copy_options::recursive);
+  std::ifstream in(src + "/mav0/imu0/data.csv");
+  std::ofstream out(dest + "/mav0/imu0/data.csv", std::ios::trunc);
+  std::string line;
+  int written = 0, first_after = 0;
+  bool after_left_out = false;
+  while (std::getline(in, line)) {
+    if (line[0] != '#' && !keep(line.substr(0, 19))) {
+      after_left_out = true;
+      continue;
+    }
+    out << line << "\n";
+    ++written;
+    if (after_left_out && line[0] != '#') {
+      first_after = written;
+      after_left_out = false;
+    }
+  }
+  return first_after;
+}
+
 TEST_F(CliTest, ImuSaysWhichIntervalsLieOutsideTheLog) {
   // The EuRoC excerpt with its IMU log cut 0.74 s after the first frame.
-  const std::string src = testing::DataPath("euroc_v101_excerpt");
-  fs::copy(src, Path("v101"), fs::copy_options::recursive);
-  std::ifstream in(src + "/mav0/imu0/data.csv");
-  std::ofstream out(Path("v101/mav0/imu0/data.csv"), std::ios::trunc);
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line[0] == '#' || line.substr(0, 19) <= "1403715274000000000") out << line << "\n";
-  }
-  out.close();
+  CopyV101WithImuRows(Path("v101"),
+                      [](const std::string& t) { return t <= "1403715274000000000"; });
   const CommandResult r = RunCli("imu --euroc " + Path("v101"));
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("note: 14 of 19 frame intervals printed"), std::string::npos) << r.output;
@@ -258,25 +279,10 @@ TEST_F(CliTest, ImuSaysWhichIntervalsLieOutsideTheLog) {
 TEST_F(CliTest, ImuGapsShortenTheStillStartAndSkipTheIntervalsAcrossThem) {
   // The EuRoC excerpt (its IMU log starts still with the first frame) without the samples of
   // 0.30-0.40 s: 100 ms without IMU inside the 1 s still start and across frames 6-8.
-  const std::string src = testing::DataPath("euroc_v101_excerpt");
-  fs::copy(src, Path("v101"), fs::copy_options::recursive);
-  std::ifstream in(src + "/mav0/imu0/data.csv");
-  std::ofstream out(Path("v101/mav0/imu0/data.csv"), std::ios::trunc);
-  std::string line;
-  int line_number = 0, left_out = 0, first_after_gap = 0;
-  while (std::getline(in, line)) {
-    ++line_number;
-    const std::string t = line.substr(0, 19);
-    if (line[0] != '#' && t >= "1403715273565000000" && t <= "1403715273660000000") {
-      ++left_out;
-      continue;
-    }
-    out << line << "\n";
-    if (line[0] != '#' && t > "1403715273660000000" && first_after_gap == 0) {
-      first_after_gap = line_number - left_out;
-    }
-  }
-  out.close();
+  const int first_after_gap = CopyV101WithImuRows(Path("v101"), [](const std::string& t) {
+    return t < "1403715273565000000" || t > "1403715273660000000";
+  });
+  ASSERT_GT(first_after_gap, 0);
   const CommandResult r = RunCli("imu --euroc " + Path("v101"));
   EXPECT_EQ(r.exit_code, 0) << r.output;
   // The still start ends at the gap (0.3 s at 200 Hz: 61 samples) instead of failing.

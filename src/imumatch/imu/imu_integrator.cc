@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <sstream>
 #include <string>
 
 #include "imumatch/core/error.h"
@@ -149,15 +150,18 @@ StillInitialization InitializeFromStill(const ImuBuffer& buffer, int64_t t0_ns, 
                                         double max_accel_drift) {
   params.Check();
   const int64_t end_ns = buffer.GapFreeEnd(t0_ns, t1_ns);
-  IMUMATCH_CHECK(end_ns > t0_ns, "the still period ends at once: an IMU gap follows "
-                                     << FormatNsAsSeconds(t0_ns) << " s");
+  // Plain messages (no "check ... failed"): callers show them to users in notes.
+  if (end_ns <= t0_ns) {
+    throw InvalidArgument("the still period ends at once: an IMU gap follows " +
+                          FormatNsAsSeconds(t0_ns) + " s");
+  }
   const std::vector<ImuSample> samples = buffer.Slice(t0_ns, end_ns);
   const int n = static_cast<int>(samples.size());
-  IMUMATCH_CHECK(
-      n >= 20, "a still period needs at least 20 IMU samples, got "
-                   << n
-                   << (end_ns < t1_ns ? " before an IMU gap at " + FormatNsAsSeconds(end_ns) + " s"
-                                      : std::string()));
+  if (n < 20) {
+    throw InvalidArgument(
+        "a still period needs at least 20 IMU samples, got " + std::to_string(n) +
+        (end_ns < t1_ns ? " before an IMU gap at " + FormatNsAsSeconds(end_ns) + " s" : ""));
+  }
   Eigen::Vector3d mg = Eigen::Vector3d::Zero(), ma = Eigen::Vector3d::Zero();
   for (const ImuSample& s : samples) {
     mg += s.gyro_rad_s;
@@ -177,11 +181,16 @@ StillInitialization InitializeFromStill(const ImuBuffer& buffer, int64_t t0_ns, 
     gyro_drift = std::max(gyro_drift, (bg / (hi - lo) - mg).cwiseAbs().maxCoeff());
     accel_drift = std::max(accel_drift, (ba / (hi - lo) - ma).cwiseAbs().maxCoeff());
   }
-  IMUMATCH_CHECK(gyro_drift <= max_gyro_drift && accel_drift <= max_accel_drift,
-                 "the IMU does not look still: block means of the gyro move by "
-                     << gyro_drift << " rad/s and of the accelerometer by " << accel_drift
-                     << " m/s^2");
-  IMUMATCH_CHECK(ma.norm() > 1.0, "mean specific force is too small to tell gravity's direction");
+  if (!(gyro_drift <= max_gyro_drift && accel_drift <= max_accel_drift)) {
+    std::ostringstream msg;
+    msg << "the IMU does not look still: block means of the gyro move by " << gyro_drift
+        << " rad/s (at most " << max_gyro_drift << ") and of the accelerometer by " << accel_drift
+        << " m/s^2 (at most " << max_accel_drift << ")";
+    throw InvalidArgument(msg.str());
+  }
+  if (!(ma.norm() > 1.0)) {
+    throw InvalidArgument("the mean specific force is too small to tell gravity's direction");
+  }
   double gyro_var = 0.0;
   for (const ImuSample& s : samples) gyro_var += (s.gyro_rad_s - mg).squaredNorm() / 3.0;
   gyro_var /= (n - 1);
