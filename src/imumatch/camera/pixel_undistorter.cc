@@ -167,24 +167,6 @@ struct NewtonArgs {
     out_y[i] = fy * y + cy;
   }
 }
-using NewtonRunFn = void (*)(const NewtonArgs&, int, const double*, const double*, double*,
-                             double*);
-void NewtonRunPortable(const NewtonArgs& a, int n, const double* us, const double* vs,
-                       double* out_x, double* out_y) {
-  NewtonRun(a, n, us, vs, out_x, out_y);
-}
-#if defined(__x86_64__) || defined(__i386__)
-[[gnu::target("avx2,fma")]] void NewtonRunAvx2(const NewtonArgs& a, int n, const double* us,
-                                               const double* vs, double* out_x, double* out_y) {
-  NewtonRun(a, n, us, vs, out_x, out_y);
-}
-[[gnu::target("avx512f,avx512dq,avx512vl")]] void NewtonRunAvx512(const NewtonArgs& a, int n,
-                                                                  const double* us,
-                                                                  const double* vs, double* out_x,
-                                                                  double* out_y) {
-  NewtonRun(a, n, us, vs, out_x, out_y);
-}
-#endif
 // The equidistant lens's radial table for a run of points inside it: x_ideal = g(rho) x_d on the
 // normalised plane, g by cubic Hermite interpolation (ToIdealInPlace's arithmetic), over arrays
 // so that the compiler vectorises it (the table reads become gathers).
@@ -212,25 +194,6 @@ struct RadialArgs {
     out_y[i] = fy * gi * yd + cy;
   }
 }
-using RadialRunFn = void (*)(const RadialArgs&, int, const double*, const double*, double*,
-                             double*);
-void RadialRunPortable(const RadialArgs& a, int n, const double* us, const double* vs,
-                       double* out_x, double* out_y) {
-  RadialRun(a, n, us, vs, out_x, out_y);
-}
-#if defined(__x86_64__) || defined(__i386__)
-[[gnu::target("avx2,fma")]] void RadialRunAvx2(const RadialArgs& a, int n, const double* us,
-                                               const double* vs, double* out_x, double* out_y) {
-  RadialRun(a, n, us, vs, out_x, out_y);
-}
-[[gnu::target("avx512f,avx512dq,avx512vl")]] void RadialRunAvx512(const RadialArgs& a, int n,
-                                                                  const double* us,
-                                                                  const double* vs, double* out_x,
-                                                                  double* out_y) {
-  RadialRun(a, n, us, vs, out_x, out_y);
-}
-#endif
-
 bool CpuHas(PixelUndistorter::Path path) {
   switch (path) {
     case PixelUndistorter::Path::kAuto:
@@ -249,31 +212,43 @@ bool CpuHas(PixelUndistorter::Path path) {
   }
   return false;
 }
-NewtonRunFn SelectNewtonRun(PixelUndistorter::Path path) {
-  using Path = PixelUndistorter::Path;
-  if (path == Path::kAuto) {
-    path = CpuHas(Path::kAvx512) ? Path::kAvx512
-                                 : (CpuHas(Path::kAvx2) ? Path::kAvx2 : Path::kPortable);
+// A run kernel (NewtonRun, RadialRun) compiled once for each instruction-set path, chosen at
+// run time: the kernel is inlined into each, and the compiler vectorises it for that path.
+template <typename Args,
+          void (*Kernel)(const Args&, int, const double*, const double*, double*, double*)>
+struct RunDispatch {
+  using Fn = void (*)(const Args&, int, const double*, const double*, double*, double*);
+  static void Portable(const Args& a, int n, const double* us, const double* vs, double* out_x,
+                       double* out_y) {
+    Kernel(a, n, us, vs, out_x, out_y);
   }
 #if defined(__x86_64__) || defined(__i386__)
-  if (path == Path::kAvx512) return &NewtonRunAvx512;
-  if (path == Path::kAvx2) return &NewtonRunAvx2;
-#endif
-  return &NewtonRunPortable;
-}
-
-RadialRunFn SelectRadialRun(PixelUndistorter::Path path) {
-  using Path = PixelUndistorter::Path;
-  if (path == Path::kAuto) {
-    path = CpuHas(Path::kAvx512) ? Path::kAvx512
-                                 : (CpuHas(Path::kAvx2) ? Path::kAvx2 : Path::kPortable);
+  [[gnu::target("avx2,fma")]] static void Avx2(const Args& a, int n, const double* us,
+                                               const double* vs, double* out_x, double* out_y) {
+    Kernel(a, n, us, vs, out_x, out_y);
   }
-#if defined(__x86_64__) || defined(__i386__)
-  if (path == Path::kAvx512) return &RadialRunAvx512;
-  if (path == Path::kAvx2) return &RadialRunAvx2;
+  [[gnu::target("avx512f,avx512dq,avx512vl")]] static void Avx512(const Args& a, int n,
+                                                                  const double* us,
+                                                                  const double* vs, double* out_x,
+                                                                  double* out_y) {
+    Kernel(a, n, us, vs, out_x, out_y);
+  }
 #endif
-  return &RadialRunPortable;
-}
+  static Fn Select(PixelUndistorter::Path path) {
+    using Path = PixelUndistorter::Path;
+    if (path == Path::kAuto) {
+      path = CpuHas(Path::kAvx512) ? Path::kAvx512
+                                   : (CpuHas(Path::kAvx2) ? Path::kAvx2 : Path::kPortable);
+    }
+#if defined(__x86_64__) || defined(__i386__)
+    if (path == Path::kAvx512) return &Avx512;
+    if (path == Path::kAvx2) return &Avx2;
+#endif
+    return &Portable;
+  }
+};
+using NewtonDispatch = RunDispatch<NewtonArgs, &NewtonRun>;
+using RadialDispatch = RunDispatch<RadialArgs, &RadialRun>;
 
 // ToIdealInPlace's frame: runs of up to 64 points loaded as doubles into us / vs; kernel(us, vs,
 // len, out_x, out_y, outside, &num_outside) marks the points it cannot take (replacing them in
@@ -320,8 +295,9 @@ void PixelUndistorter::ToIdealInPlace(float* xy, int n, int stride, Path path) c
     // Radial: the ideal point is g(rho) times the distorted one on the normalised plane, g from
     // the table by cubic Hermite interpolation (no Newton step, no transcendental function), in
     // runs of 64 like the radial-tangential loop below. Beyond the table (and NaN): ToIdeal.
-    static const RadialRunFn best_radial = SelectRadialRun(Path::kAuto);
-    const RadialRunFn radial_run = path == Path::kAuto ? best_radial : SelectRadialRun(path);
+    static const RadialDispatch::Fn best_radial = RadialDispatch::Select(Path::kAuto);
+    const RadialDispatch::Fn radial_run =
+        path == Path::kAuto ? best_radial : RadialDispatch::Select(path);
     const RadialArgs args{camera_.fx,   camera_.fy,       camera_.cx,       camera_.cy,
                           radial_step_, inv_radial_step_, radial_g_.data(), radial_dg_.data()};
     // Inside the table: rho below its last interval's start (squared: no root here; a point
@@ -346,8 +322,8 @@ void PixelUndistorter::ToIdealInPlace(float* xy, int n, int stride, Path path) c
         to_ideal);
     return;
   }
-  static const NewtonRunFn best = SelectNewtonRun(Path::kAuto);
-  const NewtonRunFn newton_run = path == Path::kAuto ? best : SelectNewtonRun(path);
+  static const NewtonDispatch::Fn best = NewtonDispatch::Select(Path::kAuto);
+  const NewtonDispatch::Fn newton_run = path == Path::kAuto ? best : NewtonDispatch::Select(path);
   const auto& [k1, k2, p1, p2, k3] = camera_.distortion;
   const NewtonArgs args{k1,
                         k2,
