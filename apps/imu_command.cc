@@ -72,9 +72,19 @@ void RunImu(const ImuArgs& a) {
   const int64_t t_still0 = d.imu.begin_ns();
   const int64_t t_still1 = std::min(d.imu.end_ns(), t_still0 + SecondsToNs(a.still_s));
   StillInitialization init;
-  try {
-    IMUMATCH_CHECK(a.still_s > 0.0, "--still 0: no still start");
-    init = InitializeFromStill(d.imu, t_still0, t_still1, d.imu_params);
+  init.end_ns = t_still0;  // no still start: no bias estimate, the attitude starts level
+  std::string no_still = "--still 0";
+  if (a.still_s > 0.0) {
+    try {
+      init = InitializeFromStill(d.imu, t_still0, t_still1, d.imu_params);
+      no_still.clear();
+    } catch (const InvalidArgument& e) {
+      // A log that starts in motion (hand-held, an excerpt): the rotations are still integrated,
+      // with the bias left in (the two rotation columns then agree).
+      no_still = e.what();
+    }
+  }
+  if (no_still.empty()) {
     std::printf(
         "still start %.3f s (%d samples): gyro bias %+.5f %+.5f %+.5f rad/s (+- %.1e), "
         "gravity in IMU %+.3f %+.3f %+.3f m/s^2\n",
@@ -85,13 +95,8 @@ void RunImu(const ImuArgs& a) {
       std::printf("(the still period ends at an IMU gap at %s s)\n",
                   FormatNsAsSeconds(init.end_ns).c_str());
     }
-  } catch (const InvalidArgument& e) {
-    // A log that starts in motion (hand-held, an excerpt): the rotations are still integrated,
-    // with the bias left in (the two rotation columns then agree); the attitude, which only the
-    // propagation between frames uses, starts level.
-    std::printf("no still start (%s): gyro bias not estimated (zero)\n", e.what());
-    init = StillInitialization();
-    init.end_ns = t_still0;
+  } else {
+    std::printf("no still start (%s): gyro bias not estimated (zero)\n", no_still.c_str());
   }
 
   CameraMotionOptions motion_options;

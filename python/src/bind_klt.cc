@@ -19,23 +19,6 @@ namespace imumatch::python {
 
 namespace {
 
-// Gray 8-bit images of one size; the seeded tracker's must be the camera's size.
-cv::Mat GrayImage(const MatView& view, const char* what) {
-  if (view.mat.empty()) throw InvalidArgument(std::string(what) + ": the image is empty");
-  if (view.mat.type() != CV_8UC1) {
-    throw InvalidArgument(std::string(what) + ": expected a uint8 gray image (H x W)");
-  }
-  return view.mat;
-}
-
-void CheckPair(const cv::Mat& a, const cv::Mat& b) {
-  if (a.size() != b.size()) {
-    throw InvalidArgument("image_a is " + std::to_string(a.cols) + "x" + std::to_string(a.rows) +
-                          ", image_b " + std::to_string(b.cols) + "x" + std::to_string(b.rows) +
-                          ": the two frames must have one size");
-  }
-}
-
 // One row per keypoint of A: the tracked position in B (image pixels; NaN where the track
 // failed), the seed, the correlation, and why each track ended as it did.
 py::dict TrackDict(const TrackResult& r, size_t n) {
@@ -119,8 +102,8 @@ void BindKlt(py::module_& m) {
         camera.Check();
         options.Check();
         const MatView va = ArrayToMat(image_a, "image_a"), vb = ArrayToMat(image_b, "image_b");
-        const cv::Mat a = GrayImage(va, "image_a"), b = GrayImage(vb, "image_b");
-        CheckPair(a, b);
+        CheckGrayPair(va, vb);
+        const cv::Mat &a = va.mat, &b = vb.mat;
         if (a.cols != camera.width || a.rows != camera.height) {
           throw InvalidArgument("image_a is " + std::to_string(a.cols) + "x" +
                                 std::to_string(a.rows) + ", the camera " +
@@ -158,8 +141,8 @@ correlation, outcomes (one per keypoint: 'tracked', 'border', 'forward_backward'
          const KltOptions& options) {
         options.Check();
         const MatView va = ArrayToMat(image_a, "image_a"), vb = ArrayToMat(image_b, "image_b");
-        const cv::Mat a = GrayImage(va, "image_a"), b = GrayImage(vb, "image_b");
-        CheckPair(a, b);
+        CheckGrayPair(va, vb);
+        const cv::Mat &a = va.mat, &b = vb.mat;
         const std::vector<cv::KeyPoint> kps = ToKeypoints(keypoints_a);
         TrackResult r;
         {

@@ -519,10 +519,12 @@ metre) or as metres per keypoint (<= 0 or NaN: none). Without depth: the epipola
         if (!depth.mat.empty() && depth.mat.type() != CV_16UC1) {
           throw InvalidArgument("depth_a: expected a uint16 H x W array (raw units)");
         }
-        MatView ia = ArrayToMat(image_a, "image_a"), ib = ArrayToMat(image_b, "image_b");
-        if (ia.mat.empty() != ib.mat.empty()) {
+        const MatView va = ArrayToMat(image_a, "image_a"), vb = ArrayToMat(image_b, "image_b");
+        if (va.mat.empty() != vb.mat.empty()) {
           throw InvalidArgument("match_guided: give both images (for refinement) or neither");
         }
+        if (!va.mat.empty()) CheckGrayPair(va, vb);
+        const cv::Mat &ia = va.mat, &ib = vb.mat;
         PyMatchResult out;
         out.guided = true;
         {
@@ -532,15 +534,9 @@ metre) or as metres per keypoint (<= 0 or NaN: none). Without depth: the epipola
                                        prediction_options, matcher_options);
           out.predictions.items = workspace.predictions();
           out.scene_near = workspace.scene_near();
-          if (!ia.mat.empty()) {
-            if (ia.mat.type() != CV_8UC1 || ib.mat.type() != CV_8UC1) {
-              throw InvalidArgument("image_a, image_b: expected uint8 gray images");
-            }
-            if (ia.mat.size() != ib.mat.size()) {
-              throw InvalidArgument("image_a and image_b differ in size");
-            }
-            out.refine_stats = RefineMatches(ia.mat, ib.mat, kps_a, kps_b, out.predictions.items,
-                                             camera, subpixel_options, out.result.matches);
+          if (!ia.empty()) {
+            out.refine_stats = RefineMatches(ia, ib, kps_a, kps_b, out.predictions.items, camera,
+                                             subpixel_options, out.result.matches);
           }
         }
         return out;

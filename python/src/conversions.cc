@@ -61,6 +61,23 @@ MatView ArrayToMat(const py::handle& object, const char* what) {
   return view;
 }
 
+void CheckGrayPair(const MatView& image_a, const MatView& image_b) {
+  for (const auto& [view, what] : {std::pair<const MatView&, const char*>{image_a, "image_a"},
+                                   std::pair<const MatView&, const char*>{image_b, "image_b"}}) {
+    if (view.mat.empty()) throw InvalidArgument(std::string(what) + ": the image is empty");
+    if (view.mat.type() != CV_8UC1) {
+      throw InvalidArgument(std::string(what) + ": expected a uint8 gray image (H x W)");
+    }
+  }
+  const cv::Mat &a = image_a.mat, &b = image_b.mat;
+  if (a.size() != b.size()) {
+    throw InvalidArgument("image_a (" + std::to_string(a.cols) + "x" + std::to_string(a.rows) +
+                          ") and image_b (" + std::to_string(b.cols) + "x" +
+                          std::to_string(b.rows) +
+                          ") differ in size: the two frames must have one size");
+  }
+}
+
 py::array MatToArray(cv::Mat mat) {
   const py::dtype dtype = DtypeOf(mat.depth());
   if (mat.empty()) {

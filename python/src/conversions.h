@@ -28,6 +28,10 @@ struct MatView {
 };
 MatView ArrayToMat(const py::handle& object, const char* what);
 
+// Checks that image_a and image_b (as ArrayToMat gave them) are two 8-bit gray frames of one
+// size: InvalidArgument naming the one that is empty, not uint8 gray (H x W), or of another size.
+void CheckGrayPair(const MatView& image_a, const MatView& image_b);
+
 // A NumPy array that owns a copy-free reference to the Mat's buffer (the Mat is moved into a
 // capsule). An empty Mat gives an empty array of shape (0,) or (0, cols).
 py::array MatToArray(cv::Mat mat);

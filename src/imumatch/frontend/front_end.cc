@@ -105,8 +105,8 @@ void FrontEnd::Initialise(int64_t t_ns, FrontEndResult& result) {
     // Not still (or too short): gravity from the mean specific force, no bias estimate. The
     // recorded samples are averaged directly: a gap in the log does not matter to a mean.
     Eigen::Vector3d f = Eigen::Vector3d::Zero();
-    for (const ImuSample& s : imu_.samples()) {
-      if (s.t_ns > t1 && !f.isZero()) break;
+    for (const ImuSample& s : imu_.samples()) {  // from t0, the first sample
+      if (s.t_ns > t1) break;
       f += s.accel_m_s2;
     }
     world_from_imu = Rigid3d(AttitudeFromGravity(f), Eigen::Vector3d::Zero());

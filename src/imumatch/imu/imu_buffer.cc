@@ -66,10 +66,9 @@ ImuSample ImuBuffer::Interpolate(int64_t t_ns) const {
   const ImuSample& b = samples_[hi];
   const ImuSample& a = samples_[hi - 1];
   if (a.t_ns == t_ns) return a;
-  if (b.t_ns - a.t_ns > options_.max_gap_ns) {
-    throw OutOfRange(Where(hi) + "IMU query at " + FormatNsAsSeconds(t_ns) + " s falls in a gap " +
-                     Interval(a.t_ns, b.t_ns) + " longer than the allowed " +
-                     std::to_string(options_.max_gap_ns / 1000000) + " ms");
+  if (GapBefore(hi)) {
+    throw OutOfRange(GapMessage(hi) + ": the IMU query at " + FormatNsAsSeconds(t_ns) +
+                     " s falls in it");
   }
   const double alpha = static_cast<double>(t_ns - a.t_ns) / static_cast<double>(b.t_ns - a.t_ns);
   ImuSample s;
@@ -87,7 +86,8 @@ std::vector<ImuSample> ImuBuffer::Slice(int64_t t0_ns, int64_t t1_ns) const {
   out.push_back(Interpolate(t0_ns));
   const ImuSample last = Interpolate(t1_ns);
   for (size_t i = UpperIndex(t0_ns); i < samples_.size() && samples_[i].t_ns < t1_ns; ++i) {
-    if (samples_[i].t_ns - out.back().t_ns > options_.max_gap_ns) {
+    // (The stretch from t0 to the first sample is not a gap: Interpolate(t0_ns) refused that.)
+    if (GapBefore(i)) {
       throw OutOfRange(GapMessage(i) + " inside the requested interval " + Interval(t0_ns, t1_ns));
     }
     out.push_back(samples_[i]);
@@ -103,6 +103,10 @@ std::string ImuBuffer::Where(size_t i) const {
   return source_ + ": ";
 }
 
+bool ImuBuffer::GapBefore(size_t i) const {
+  return i > 0 && samples_[i].t_ns - samples_[i - 1].t_ns > options_.max_gap_ns;
+}
+
 std::string ImuBuffer::GapMessage(size_t after) const {
   const int64_t a = samples_[after - 1].t_ns, b = samples_[after].t_ns;
   std::ostringstream msg;
@@ -115,7 +119,7 @@ std::string ImuBuffer::GapMessage(size_t after) const {
 std::vector<ImuBuffer::Gap> ImuBuffer::Gaps() const {
   std::vector<Gap> gaps;
   for (size_t i = 1; i < samples_.size(); ++i) {
-    if (samples_[i].t_ns - samples_[i - 1].t_ns > options_.max_gap_ns) {
+    if (GapBefore(i)) {
       gaps.push_back({samples_[i - 1].t_ns, samples_[i].t_ns, lines_[i]});
     }
   }
@@ -125,7 +129,7 @@ std::vector<ImuBuffer::Gap> ImuBuffer::Gaps() const {
 int64_t ImuBuffer::GapFreeEnd(int64_t t0_ns, int64_t t1_ns) const {
   Interpolate(t0_ns);  // throws outside the range or inside a gap
   for (size_t i = UpperIndex(t0_ns); i < samples_.size() && samples_[i - 1].t_ns < t1_ns; ++i) {
-    if (samples_[i].t_ns - samples_[i - 1].t_ns > options_.max_gap_ns) {
+    if (GapBefore(i)) {
       return std::min(t1_ns, samples_[i - 1].t_ns);
     }
   }

@@ -60,6 +60,7 @@ class ImuBuffer {
 
  private:
   size_t UpperIndex(int64_t t_ns) const;  // first sample with t > t_ns
+  bool GapBefore(size_t i) const;         // samples i - 1 and i are farther apart than max_gap_ns
   std::string GapMessage(size_t after) const;
   ImuBufferOptions options_;
   std::vector<ImuSample> samples_;
