@@ -81,9 +81,13 @@ void PinholeCamera::Check() const {
                  "image size " << width << "x" << height << " (1.." << kMaxSide << " a side)");
   IMUMATCH_CHECK(std::isfinite(fx) && fx > 0 && std::isfinite(fy) && fy > 0,
                  "focal lengths fx=" << fx << " fy=" << fy);
-  IMUMATCH_CHECK(std::isfinite(cx) && std::isfinite(cy), "principal point");
+  IMUMATCH_CHECK(std::isfinite(cx) && std::isfinite(cy),
+                 "principal point cx=" << cx << " cy=" << cy << " is not finite");
   IMUMATCH_CHECK(std::isfinite(depth_scale) && depth_scale > 0, "depth_scale=" << depth_scale);
-  for (double d : distortion) IMUMATCH_CHECK(std::isfinite(d), "distortion coefficient");
+  for (size_t i = 0; i < distortion.size(); ++i) {
+    IMUMATCH_CHECK(std::isfinite(distortion[i]),
+                   "distortion coefficient " << i + 1 << " of 5 is " << distortion[i]);
+  }
   IMUMATCH_CHECK(
       model == DistortionModel::kRadialTangential || model == DistortionModel::kEquidistant,
       "unknown distortion model " << static_cast<int>(model));

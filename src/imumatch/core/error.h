@@ -51,12 +51,14 @@ class OutOfRange : public Error {
 
 }  // namespace imumatch
 
-// Throws imumatch::InvalidArgument("<expr> failed: <message>") when cond is false.
-#define IMUMATCH_CHECK(cond, message)                                    \
-  do {                                                                   \
-    if (!(cond)) {                                                       \
-      std::ostringstream imumatch_check_stream_;                         \
-      imumatch_check_stream_ << "check '" #cond "' failed: " << message; \
-      throw ::imumatch::InvalidArgument(imumatch_check_stream_.str());   \
-    }                                                                    \
+// Throws imumatch::InvalidArgument("<message> (required: <cond>)") when cond is false: the
+// message first, as users read it (it names the value and says what is wrong), the condition
+// after it for the caller who wrote the call.
+#define IMUMATCH_CHECK(cond, message)                                  \
+  do {                                                                 \
+    if (!(cond)) {                                                     \
+      std::ostringstream imumatch_check_stream_;                       \
+      imumatch_check_stream_ << message << " (required: " #cond ")";   \
+      throw ::imumatch::InvalidArgument(imumatch_check_stream_.str()); \
+    }                                                                  \
   } while (false)

@@ -9,7 +9,8 @@ namespace imumatch {
 
 void ImuSimulatorOptions::Check() const {
   IMUMATCH_CHECK(std::isfinite(rate_hz) && rate_hz > 0 && rate_hz <= 1e5, "rate_hz=" << rate_hz);
-  IMUMATCH_CHECK(initial_bias.gyro.allFinite() && initial_bias.accel.allFinite(), "initial bias");
+  IMUMATCH_CHECK(initial_bias.gyro.allFinite() && initial_bias.accel.allFinite(),
+                 "initial bias is not finite");
 }
 
 std::vector<ImuSample> SimulateImu(const Trajectory& trajectory, const ImuParams& params,
