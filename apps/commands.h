@@ -2,9 +2,24 @@
 
 #include <cstddef>
 #include <functional>
+#include <sstream>
 #include <string>
 
 #include <CLI/CLI.hpp>
+
+#include "imumatch/core/error.h"
+
+// The commands' own checks of what the user typed: throws imumatch::InvalidArgument(message) when
+// cond is false. Unlike IMUMATCH_CHECK the message stands alone (it names the option), without
+// the C++ condition after it.
+#define IMUMATCH_CLI_REQUIRE(cond, message)                          \
+  do {                                                               \
+    if (!(cond)) {                                                   \
+      std::ostringstream imumatch_cli_stream_;                       \
+      imumatch_cli_stream_ << message;                               \
+      throw ::imumatch::InvalidArgument(imumatch_cli_stream_.str()); \
+    }                                                                \
+  } while (false)
 
 namespace imumatch::apps {
 

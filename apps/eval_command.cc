@@ -32,6 +32,7 @@
 #include "imumatch/io/dataset.h"
 #include "imumatch/io/output_files.h"
 #include "imumatch/io/pose_pair.h"
+#include "number_checks.h"
 
 namespace imumatch::apps {
 namespace {
@@ -84,9 +85,10 @@ void AddCommonOptions(CLI::App* cmd, CommonArgs& a) {
       ->capture_default_str()
       ->check(CLI::Range(1, FeatureOptions::kMaxKeypoints));
   cmd->add_option(
-      "--threshold", a.threshold,
-      "correct-match threshold in px (default: 1.5 on synthetic data, automatic "
-      "median + 3 MAD-sigma of brute-force residuals, clamped to [2, 10], on real data)");
+         "--threshold", a.threshold,
+         "correct-match threshold in px (default: 1.5 on synthetic data, automatic "
+         "median + 3 MAD-sigma of brute-force residuals, clamped to [2, 10], on real data)")
+      ->check(PositiveFinite());
   cmd->add_option("--imu-mode", a.imu_mode, "IMU integration: so3 | paper")->capture_default_str();
   cmd->add_option("--motion-source", a.motion_source,
                   "imu (integrate the IMU) | gt (exact ground-truth motion)")
@@ -103,27 +105,34 @@ void AddCommonOptions(CLI::App* cmd, CommonArgs& a) {
       ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--progress", a.progress, "progress bar on stderr (default: when it is a TTY)");
   cmd->add_option("--ratio", a.ratio, "Lowe's ratio for brute force and guided matching")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(NumberIn(0.0, true, 1.0, false));
   cmd->add_flag("--mutual", a.mutual, "guided: keep only mutual best matches");
   cmd->add_option("--gate", a.gate, "guided: chi-square gate probability of the search window")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(NumberIn(0.0, true, 1.0, true));
   cmd->add_option("--fixed-window", a.fixed_half, "fixed10 method: half size of the square (px)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(PositiveFinite());
   cmd->add_option("--z-min", a.z_min,
                   "no-depth prediction: nearest depth of the segment (m; the scene may move it "
-                  "further, see --fixed-segments)");
+                  "further, see --fixed-segments)")
+      ->check(PositiveFinite());
   cmd->add_flag("--fixed-segments", a.fixed_segments,
                 "no-depth prediction: segments from --z-min, not from the nearest depth a pilot "
                 "of matches shows");
-  cmd->add_option("--z-max", a.z_max, "no-depth prediction: farthest depth of the segment (m)");
+  cmd->add_option("--z-max", a.z_max, "no-depth prediction: farthest depth of the segment (m)")
+      ->check(PositiveFinite());
   cmd->add_option("--guided-ratio", a.guided_ratio,
-                  "guided: Lowe's ratio inside the search region (default: --ratio)");
+                  "guided: Lowe's ratio inside the search region (default: --ratio)")
+      ->check(NumberIn(0.0, true, 1.0, false));
   cmd->add_option("--sigma-scaling", a.sigma_scaling,
                   "keypoint localisation noise: size (grows with the keypoint's size) | none")
       ->capture_default_str();
   cmd->add_option("--orientation-tolerance", a.orientation_tolerance,
                   "guided: largest keypoint angle change off the predicted one (deg; 180 = no "
-                  "orientation check)");
+                  "orientation check)")
+      ->check(NumberIn(0.0, false, 180.0, false));
   cmd->add_flag("--no-refine", a.no_refine,
                 "guided: do not refine matched positions to sub-pixel accuracy");
   cmd->add_flag("--fixed-gyro-bias", a.fixed_gyro_bias,
@@ -148,10 +157,11 @@ void AddCommonOptions(CLI::App* cmd, CommonArgs& a) {
   cmd->add_option("--gain-b", a.gain_b,
                   "exposure change: multiply frame B of every pair by this gain (1 = off)")
       ->capture_default_str()
-      ->check(CLI::Range(0.01, 100.0));
+      ->check(NumberIn(0.01, false, 100.0, false));
   cmd->add_option("--still", a.still_s,
                   "recorded IMU: seconds of still start used to estimate the gyro bias (0 = none)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(NonNegativeFinite());
 }
 
 std::vector<std::string> SplitList(const std::string& s) {
@@ -175,9 +185,9 @@ EvaluationOptions MakeOptions(const CommonArgs& a) {
   o.motion_source = ParseMotionSource(a.motion_source);
   o.seed = a.seed;
   o.keep_visuals = a.images;
-  IMUMATCH_CHECK(std::isfinite(a.threshold) && a.threshold >= 0.0,
-                 "--threshold must be a finite number of pixels > 0, got " << a.threshold);
-  IMUMATCH_CHECK(a.e2e_frames == 0 || a.e2e_frames >= 2, "--e2e-frames must be 0 or >= 2");
+  IMUMATCH_CLI_REQUIRE(std::isfinite(a.threshold) && a.threshold >= 0.0,
+                       "--threshold must be a finite number of pixels > 0, got " << a.threshold);
+  IMUMATCH_CLI_REQUIRE(a.e2e_frames == 0 || a.e2e_frames >= 2, "--e2e-frames must be 0 or >= 2");
   o.ratio = a.ratio;
   o.guided.ratio = a.guided_ratio > 0.0 ? a.guided_ratio : a.ratio;
   o.guided.mutual = a.mutual;
@@ -185,6 +195,12 @@ EvaluationOptions MakeOptions(const CommonArgs& a) {
   o.prediction.fixed_half_size = a.fixed_half;
   if (a.z_min >= 0.0) o.prediction.segment_min_depth = a.z_min;
   if (a.z_max >= 0.0) o.prediction.segment_max_depth = a.z_max;
+  IMUMATCH_CLI_REQUIRE(o.prediction.segment_max_depth > o.prediction.segment_min_depth,
+                       "--z-max (" << o.prediction.segment_max_depth << " m"
+                                   << (a.z_max < 0.0 ? ", the default" : "")
+                                   << ") must be farther than --z-min ("
+                                   << o.prediction.segment_min_depth << " m"
+                                   << (a.z_min < 0.0 ? ", the default" : "") << ")");
   o.prediction.scene_near.enabled = !a.fixed_segments;
   o.refine_subpixel = !a.no_refine;
   o.second_pass = !a.single_pass;
@@ -323,8 +339,9 @@ void RunDemo(CommonArgs a, int intermediate, const std::string& motions, const s
   for (const std::string& g : SplitList(gains)) {
     char* end = nullptr;
     const double v = std::strtod(g.c_str(), &end);
-    IMUMATCH_CHECK(end != g.c_str() && *end == '\0' && std::isfinite(v) && v > 0.0 && v <= 100.0,
-                   "--gains: '" << g << "' is not a gain in (0, 100]");
+    IMUMATCH_CLI_REQUIRE(
+        end != g.c_str() && *end == '\0' && std::isfinite(v) && v > 0.0 && v <= 100.0,
+        "--gains: '" << g << "' is not a gain in (0, 100]");
     gain_values.push_back(v);
   }
   so.imu_model = a.imu_model;
@@ -398,8 +415,8 @@ void RunDemo(CommonArgs a, int intermediate, const std::string& motions, const s
 }  // namespace
 
 int ApplyThreads(int threads) {
-  IMUMATCH_CHECK(threads >= 0 && threads <= 1024,
-                 "--threads must be in [0, 1024], got " << threads);
+  IMUMATCH_CLI_REQUIRE(threads >= 0 && threads <= 1024,
+                       "--threads must be in [0, 1024], got " << threads);
   const int n =
       threads > 0 ? threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   cv::setNumThreads(n);
@@ -446,7 +463,7 @@ void AddEvalCommand(CLI::App& app) {
   cmd->add_option("--out", args->common.out, "output folder")->capture_default_str();
   auto* interval = cmd->add_option("--interval", args->interval,
                                    "pair frames this many seconds apart (e.g. 2 as in the seed)")
-                       ->check(CLI::NonNegativeNumber);
+                       ->check(NonNegativeFinite());
   cmd->add_option("--step", args->step, "pair frame i with frame i+N")
       ->capture_default_str()
       ->check(CLI::PositiveNumber)

@@ -16,6 +16,7 @@
 #include "imumatch/imu/camera_motion.h"
 #include "imumatch/imu/imu_integrator.h"
 #include "imumatch/io/dataset.h"
+#include "number_checks.h"
 
 namespace imumatch::apps {
 namespace {
@@ -59,7 +60,7 @@ void PrintPair(const Dataset& d, size_t i, NavState& nav, const ImuBias& bias,
 }
 
 void RunImu(const ImuArgs& a) {
-  IMUMATCH_CHECK(a.still_s >= 0.0, "--still must be >= 0");
+  IMUMATCH_CLI_REQUIRE(a.still_s >= 0.0, "--still must be >= 0");
   DatasetOptions options;
   options.max_frames = a.max_frames;
   const Dataset d = LoadDataset(a.path, options);
@@ -67,7 +68,7 @@ void RunImu(const ImuArgs& a) {
             << " frames, " << d.imu.size() << " IMU samples\n"
             << d.imu_source_note << "\n";
   if (d.imu.empty()) throw InvalidArgument("the dataset has no IMU data");
-  IMUMATCH_CHECK(d.frames.size() >= 2, "need at least two frames");
+  IMUMATCH_CLI_REQUIRE(d.frames.size() >= 2, "need at least two frames");
 
   const int64_t t_still0 = d.imu.begin_ns();
   const int64_t t_still1 = std::min(d.imu.end_ns(), t_still0 + SecondsToNs(a.still_s));
@@ -171,7 +172,8 @@ void AddImuCommand(CLI::App& app) {
   sub->add_option("--still", args->still_s,
                   "Length of the still start (s; 0 = none: the gyro bias is not estimated, as when "
                   "the log does not start still)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(NonNegativeFinite());
   sub->add_option("--frames", args->max_frames, "Number of frames to use (0 = all)")
       ->capture_default_str();
   sub->add_option("--mode", args->mode, "Integration mode: so3 or paper")->capture_default_str();

@@ -16,6 +16,7 @@
 #include "imumatch/io/synthetic_io.h"
 #include "imumatch/sim/motions.h"
 #include "imumatch/sim/synthetic_sequence.h"
+#include "number_checks.h"
 
 namespace imumatch::apps {
 namespace {
@@ -44,7 +45,7 @@ struct SynthArgs {
 PinholeCamera SynthCamera(const SynthArgs& a) {
   if (a.camera == "kinect") {
     // Kinect-like camera scaled to the requested width (4:3).
-    IMUMATCH_CHECK(a.width >= 16 && a.width <= 4096, "--width must be in [16, 4096]");
+    IMUMATCH_CLI_REQUIRE(a.width >= 16 && a.width <= 4096, "--width must be in [16, 4096]");
     return PinholeCamera::KinectDefault().ScaledToWidth(a.width);
   }
   if (a.width_option != nullptr && a.width_option->count() > 0) {
@@ -124,7 +125,9 @@ void AddSynthCommand(CLI::App& app) {
   sub->add_option("--motion", args->motion, "Motion: " + motions)->required();
   sub->add_option("--out", args->out, "Output folder (created; must be empty unless --overwrite)")
       ->required();
-  sub->add_option("--fps", args->fps, "Frame rate (Hz)")->capture_default_str();
+  sub->add_option("--fps", args->fps, "Frame rate (Hz)")
+      ->capture_default_str()
+      ->check(NumberIn(0.0, true, 1000.0, false));
   sub->add_option("--imu", args->imu, "IMU noise model: euroc, mems or ideal")
       ->capture_default_str();
   sub->add_option("--seed", args->seed, "Seed of the IMU noise (and depth noise)")
@@ -145,15 +148,20 @@ void AddSynthCommand(CLI::App& app) {
          "k...'); the images are rendered through the lens, the depth and poses stay "
          "exact")
       ->capture_default_str();
-  sub->add_option("--duration", args->duration_s, "Duration of the motion (s), default per motion");
-  sub->add_option("--still", args->still_s, "Still time before and after the motion (s)");
-  sub->add_option("--t0", args->t0_s, "Timestamp of the start (s)")->capture_default_str();
+  sub->add_option("--duration", args->duration_s, "Duration of the motion (s), default per motion")
+      ->check(PositiveFinite());
+  sub->add_option("--still", args->still_s, "Still time before and after the motion (s)")
+      ->check(NonNegativeFinite());
+  sub->add_option("--t0", args->t0_s, "Timestamp of the start (s)")
+      ->capture_default_str()
+      ->check(NonNegativeFinite());
   sub->add_option("--texel", args->texel_m, "Texture resolution of the room (m per texel)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(PositiveFinite());
   sub->add_option("--gain", args->gain,
                   "Exposure flicker: every odd frame's intensities times this gain (1 = off)")
       ->capture_default_str()
-      ->check(CLI::Range(0.01, 100.0));
+      ->check(NumberIn(0.01, false, 100.0, false));
   sub->add_option("--format", args->format,
                   "Folder layout: tum (rgb/, depth/, *.txt, sequence.json) or euroc (mav0/cam0, "
                   "imu0, depth0, state_groundtruth_estimate0 with sensor.yaml files, as EuRoC "

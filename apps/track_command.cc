@@ -2,6 +2,7 @@
 // per-frame CSV, the trajectory in TUM format, a report and match images; judges the matches and
 // the trajectory when the dataset has ground truth.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -15,6 +16,7 @@
 #include "imumatch/eval/track_run.h"
 #include "imumatch/io/dataset.h"
 #include "imumatch/io/output_files.h"
+#include "number_checks.h"
 
 namespace imumatch::apps {
 namespace {
@@ -64,8 +66,8 @@ void RunTrackCommand(const TrackArgs& a) {
     if (item.empty()) continue;
     char* end = nullptr;
     const double v = std::strtod(item.c_str(), &end);
-    IMUMATCH_CHECK(end != item.c_str() && *end == '\0',
-                   "--thresholds: '" << item << "' is not a number of pixels");
+    IMUMATCH_CLI_REQUIRE(end != item.c_str() && *end == '\0' && std::isfinite(v) && v > 0.0,
+                         "--thresholds: '" << item << "' is not a positive number of pixels");
     o.thresholds_px.push_back(v);
   }
   o.Check();
@@ -80,7 +82,14 @@ void RunTrackCommand(const TrackArgs& a) {
   const EvalSource source = MakeDiskSource(LoadDataset(a.path, dopts));
   std::cerr << "imumatch track: " << source.dataset.name << " (" << source.dataset.frames.size()
             << " frames); IMU: " << source.dataset.imu_source_note << "\n";
-  const size_t first = std::min(a.first, source.dataset.frames.size());
+  const size_t frames = source.dataset.frames.size();
+  if (frames < 2 || a.first > frames - 2) {
+    throw InvalidArgument("--first " + std::to_string(a.first) + ": " + source.dataset.name +
+                          " has " + std::to_string(frames) +
+                          " frames; tracking needs two from the first (at most --first " +
+                          std::to_string(frames < 2 ? 0 : frames - 2) + ")");
+  }
+  const size_t first = a.first;
   const size_t n = a.max_frames > 0 ? std::min(a.max_frames, source.dataset.frames.size() - first)
                                     : source.dataset.frames.size() - first;
   o.progress = MakeProgress(a.progress, n, "track", "frames");
@@ -136,7 +145,7 @@ void AddTrackCommand(CLI::App& app) {
   cmd->add_option("--still", a->still_s,
                   "seconds of still IMU at the start (gravity and gyro bias)")
       ->capture_default_str()
-      ->check(CLI::Range(0.0, 3600.0));
+      ->check(NumberIn(0.0, false, 3600.0, false));
   cmd->add_option("--first", a->first, "first frame")->capture_default_str();
   cmd->add_option("--camera", a->camera, kCameraOptionHelp);
   cmd->add_option("--max-frames", a->max_frames, "frames to run (0 = all)")->capture_default_str();

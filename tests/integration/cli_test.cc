@@ -158,9 +158,10 @@ TEST_F(CliTest, BadInputsGiveClearErrorsAndExitCodes) {
   r = RunCli("eval " + pair + " --detectors orb,harris --out " + Path("o4"));
   EXPECT_EQ(r.exit_code, 4) << r.output;
   EXPECT_NE(r.output.find("harris"), std::string::npos) << r.output;
+  // A value outside its option's interval: a usage error (2) naming the option and the interval.
   r = RunCli("eval " + pair + " --gate 1.5 --out " + Path("o5"));
-  EXPECT_EQ(r.exit_code, 4) << r.output;
-  EXPECT_NE(r.output.find("gate_probability"), std::string::npos) << r.output;
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--gate: 1.5 is not in (0, 1)"), std::string::npos) << r.output;
   // Usage errors (2).
   r = RunCli("eval");
   EXPECT_EQ(r.exit_code, 2) << r.output;
@@ -180,11 +181,37 @@ TEST_F(CliTest, HostileInputsAndOptionsAreRefusedBeforeTheWork) {
   r = RunCli("eval " + pair + " --max-pairs -1 --out " + Path("o2"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("max-pairs"), std::string::npos) << r.output;
-  // An infinite threshold or an unwritable --out: said before the evaluation runs.
-  r = RunCli("eval " + pair + " --threshold inf --out " + Path("o3"));
+  // Numbers that are not finite or lie outside their option's interval: usage errors naming the
+  // option, before anything is read. A negative value never reaches an option's "automatic"
+  // default (--orientation-tolerance -1, --z-min -1 and synth's --duration -1 ran silently with
+  // the defaults).
+  for (const std::string& bad :
+       {std::string("eval ") + pair + " --threshold inf", "eval " + pair + " --threshold 0",
+        "eval " + pair + " --ratio nan", "eval " + pair + " --interval nan",
+        "eval " + pair + " --orientation-tolerance -1", "eval " + pair + " --z-min -1",
+        "eval " + pair + " --fixed-window 0", "eval " + pair + " --still -0.5",
+        std::string("synth --motion walk --duration -1"),
+        std::string("synth --motion walk --fps 0"), std::string("synth --motion walk --texel 0")}) {
+    const size_t at = bad.rfind(" --") + 1;
+    const std::string option = bad.substr(at, bad.find(' ', at) - at);
+    r = RunCli(bad + " --out " + Path("o3"));
+    EXPECT_EQ(r.exit_code, 2) << bad << "\n" << r.output;
+    EXPECT_NE(r.output.find(option + ": "), std::string::npos) << bad << "\n" << r.output;
+    EXPECT_EQ(r.output.find("Table"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(Path("o3"))) << bad;
+  }
+  // Options that contradict each other or the dataset: invalid arguments (4) naming them.
+  r = RunCli("eval " + pair + " --z-min 5 --z-max 2 --out " + Path("o4"));
   EXPECT_EQ(r.exit_code, 4) << r.output;
-  EXPECT_NE(r.output.find("--threshold"), std::string::npos) << r.output;
-  EXPECT_EQ(r.output.find("Table"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--z-max (2 m) must be farther than --z-min (5 m)"), std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("required:"), std::string::npos) << r.output;
+  r = RunCli("track " + testing::DataPath("euroc_v101_excerpt") + " --first 19 --out " +
+             Path("o4"));
+  EXPECT_EQ(r.exit_code, 4) << r.output;
+  EXPECT_NE(r.output.find("--first 19: euroc_v101_excerpt has 20 frames"), std::string::npos)
+      << r.output;
+  // An unwritable --out: said before the evaluation runs.
   r = RunCli("eval " + pair + " --out /proc/imumatch-out");
   EXPECT_EQ(r.exit_code, 4) << r.output;
   EXPECT_NE(r.output.find("/proc/imumatch-out"), std::string::npos) << r.output;
