@@ -559,6 +559,32 @@ void WarnAboutImuGaps(Dataset& d) {
   d.warnings.push_back(msg.str());
 }
 
+// A recorded IMU whose samples come at another rate than its calibration's rate_hz says (a
+// sensor.yaml copied from another IMU or another rate setting, a log decimated since). The
+// calibration's noise densities are continuous-time and stay; the per-sample noise they imply
+// (density x sqrt(rate), the still start's floor) is the recorded rate's, which replaces the
+// stated one. Within 10 % (a clock's drift, the jitter of a driver's timestamps) nothing is said.
+void CheckImuRate(Dataset& d) {
+  if (d.imu_simulated || d.imu.size() < 3) return;
+  const std::vector<ImuSample>& s = d.imu.samples();
+  std::vector<int64_t> intervals;
+  intervals.reserve(s.size() - 1);
+  for (size_t i = 1; i < s.size(); ++i) intervals.push_back(s[i].t_ns - s[i - 1].t_ns);
+  const auto mid = intervals.begin() + static_cast<std::ptrdiff_t>(intervals.size() / 2);
+  std::nth_element(intervals.begin(), mid, intervals.end());
+  if (*mid <= 0) return;  // the buffer refuses such logs; nothing to compare
+  const double recorded_hz = 1e9 / static_cast<double>(*mid);
+  const double stated_hz = d.imu_params.rate_hz;
+  if (std::fabs(recorded_hz / stated_hz - 1.0) <= 0.1) return;
+  std::ostringstream msg;
+  msg << std::fixed << std::setprecision(1) << d.imu.source() << ": the IMU samples come at "
+      << recorded_hz << " Hz (median interval " << static_cast<double>(*mid) * 1e-6
+      << " ms) but its calibration says rate_hz " << FormatDoubleExact(stated_hz)
+      << ": the noise per sample is taken at the recorded rate";
+  d.warnings.push_back(msg.str());
+  d.imu_params.rate_hz = recorded_hz;
+}
+
 Dataset LoadDatasetOfKind(const std::string& path, const DatasetOptions& options) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path, "dataset folder not found");
@@ -578,6 +604,7 @@ Dataset LoadDataset(const std::string& path, const DatasetOptions& options) {
   options.Check();
   Dataset d = LoadDatasetOfKind(path, options);
   WarnAboutImuGaps(d);
+  CheckImuRate(d);
   return d;
 }
 

@@ -542,6 +542,35 @@ TEST(DatasetWarnings, GapsInTheImuLogAreSaidWithTheirLine) {
   EXPECT_TRUE(said) << ::testing::PrintToString(d.warnings);
 }
 
+TEST(DatasetWarnings, AnImuRecordedAtAnotherRateThanItsCalibrationSaysIsSaid) {
+  TempDir dir;
+  const EurocDepthFolder f = MakeEurocDepthFolder(dir);
+  // The fixture's samples come every 5 ms, as the real sensor.yaml's rate_hz (200) says: no word.
+  const Dataset at_rate = LoadDataset(f.root);
+  EXPECT_DOUBLE_EQ(at_rate.imu_params.rate_hz, 200.0);
+  for (const std::string& w : at_rate.warnings)
+    EXPECT_EQ(w.find("rate_hz"), std::string::npos) << w;
+  // Every 10 ms, with a few milliseconds of jitter: 100 Hz recorded against 200 Hz stated.
+  std::string imu;
+  for (int i = 0; i <= 20; ++i) {
+    const int jitter_ns = (i % 3 == 1) ? 300000 : 0;
+    imu += std::to_string(950000000 + 10000000 * i + jitter_ns) + ",0,0,0.1,0,0,9.81\n";
+  }
+  dir.Write("MH_depth/mav0/imu0/data.csv", imu);
+  const Dataset d = LoadDataset(f.root);
+  EXPECT_NEAR(d.imu_params.rate_hz, 100.0, 1e-9);
+  // The calibration's densities stay: only the rate that discretises them changes.
+  EXPECT_DOUBLE_EQ(d.imu_params.gyro_noise_density, at_rate.imu_params.gyro_noise_density);
+  bool said = false;
+  for (const std::string& w : d.warnings) {
+    if (w.find("imu0/data.csv: the IMU samples come at 100.0 Hz (median interval 10.0 ms) but "
+               "its calibration says rate_hz 200") != std::string::npos) {
+      said = true;
+    }
+  }
+  EXPECT_TRUE(said) << ::testing::PrintToString(d.warnings);
+}
+
 TEST(DatasetWarnings, ASynthFolderWithoutSequenceJsonIsSaid) {
   testing::TempDir dir;
   WriteTumFolder(dir, 4, 4);
