@@ -82,6 +82,9 @@ void RunTrackCommand(const TrackArgs& a) {
   const EvalSource source = MakeDiskSource(LoadDataset(a.path, dopts));
   std::cerr << "imumatch track: " << source.dataset.name << " (" << source.dataset.frames.size()
             << " frames); IMU: " << source.dataset.imu_source_note << "\n";
+  for (const std::string& w : source.dataset.warnings) {
+    std::cerr << "imumatch: warning: " << w << "\n";
+  }
   const size_t frames = source.dataset.frames.size();
   if (frames < 2 || a.first > frames - 2) {
     throw InvalidArgument("--first " + std::to_string(a.first) + ": " + source.dataset.name +

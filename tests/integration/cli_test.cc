@@ -327,6 +327,13 @@ TEST_F(CliTest, ImuGapsShortenTheStillStartAndSkipTheIntervalsAcrossThem) {
                           "the IMU log has 1 gap longer than 50.0 ms"),
             std::string::npos)
       << r.output;
+  // track says the loader's warnings too (it printed none of them).
+  const CommandResult t = RunCli("track " + Path("v101") + " --out " + Path("t"));
+  EXPECT_EQ(t.exit_code, 0) << t.output;
+  EXPECT_NE(t.output.find("imumatch: warning: " + Path("v101") + "/mav0/" + where +
+                          "the IMU log has 1 gap longer than 50.0 ms"),
+            std::string::npos)
+      << t.output;
 }
 
 TEST_F(CliTest, ImuOnALogThatStartsInMotionIntegratesWithoutABias) {

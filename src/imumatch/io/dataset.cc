@@ -365,6 +365,10 @@ Dataset LoadEurocDataset(const std::string& path, const DatasetOptions& options)
                          FormatDoubleExact(seq.cam0.timeshift_cam_imu_s) +
                          " s) into the IMU's clock (t_imu = t_cam + shift)");
   }
+  if (seq.groundtruth.empty() && !seq.groundtruth_source.empty()) {
+    d.warnings.push_back(seq.mav0 + "/" + seq.groundtruth_source +
+                         "/data.csv holds no poses: the recording has no ground truth");
+  }
   if (!seq.groundtruth.empty() && seq.groundtruth_source != "state_groundtruth_estimate0") {
     d.warnings.push_back("ground truth from " + seq.groundtruth_source +
                          "/data.csv (poses only): the velocity at each frame is the slope of the "

@@ -571,6 +571,20 @@ TEST(DatasetWarnings, AnImuRecordedAtAnotherRateThanItsCalibrationSaysIsSaid) {
   EXPECT_TRUE(said) << ::testing::PrintToString(d.warnings);
 }
 
+TEST(DatasetWarnings, AGroundTruthFileWithoutPosesIsSaid) {
+  TempDir dir;
+  const EurocDepthFolder f = MakeEurocDepthFolder(dir);
+  dir.Write("MH_depth/mav0/state_groundtruth_estimate0/data.csv",
+            "#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w []\n");
+  const Dataset d = LoadDataset(f.root);
+  EXPECT_TRUE(d.groundtruth_world_from_cam.empty());
+  bool said = false;
+  for (const std::string& w : d.warnings) {
+    said |= w.find("state_groundtruth_estimate0/data.csv holds no poses") != std::string::npos;
+  }
+  EXPECT_TRUE(said) << ::testing::PrintToString(d.warnings);
+}
+
 TEST(DatasetWarnings, ASynthFolderWithoutSequenceJsonIsSaid) {
   testing::TempDir dir;
   WriteTumFolder(dir, 4, 4);

@@ -28,7 +28,11 @@ YAML::Node LoadOpenCvYaml(const std::string& path) {
   if (text.rfind("%YAML", 0) == 0) text[0] = '#';
   try {
     YAML::Node root = YAML::Load(text);
-    if (!root.IsMap()) throw InputError(path, "expected a YAML mapping of keys to values");
+    if (!root.IsMap()) {
+      throw InputError(path, root.IsNull() ? "the file holds no keys (empty, or comments only): "
+                                             "expected a YAML mapping of keys to values"
+                                           : "expected a YAML mapping of keys to values");
+    }
     return root;
   } catch (const YAML::Exception& e) {
     throw InputError(path, e.mark.line >= 0 ? e.mark.line + 1 : 0, "YAML error: " + e.msg);

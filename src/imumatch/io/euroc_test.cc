@@ -319,6 +319,12 @@ TEST(Euroc, SensorYamlErrors) {
   ExpectInputError([&] { ReadEurocCameraSensor(text_value); }, text_value, 6, "'abc'");
   const std::string syntax = dir.Write("e.yaml", "%YAML:1.0\nrate_hz: 20\nintrinsics: [1, 2\n");
   ExpectInputError([&] { ReadEurocCameraSensor(syntax); }, syntax, 4, "YAML error");
+  const std::string header_only = dir.Write("g.yaml", "%YAML:1.0\n# nothing else\n");
+  ExpectInputError([&] { ReadEurocCameraSensor(header_only); }, header_only, 0,
+                   "the file holds no keys");
+  const std::string a_list = dir.Write("h.yaml", "- 1\n- 2\n");
+  ExpectInputError([&] { ReadEurocImuSensor(a_list); }, a_list, 0,
+                   "expected a YAML mapping of keys to values");
   const std::string no_key = dir.Write("f.yaml", "%YAML:1.0\nsensor_type: imu\nrate_hz: 200\n");
   ExpectInputError([&] { ReadEurocImuSensor(no_key); }, no_key, 0,
                    "missing key 'gyroscope_noise_density'");
