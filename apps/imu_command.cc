@@ -61,6 +61,9 @@ void PrintPair(const Dataset& d, size_t i, NavState& nav, const ImuBias& bias,
 
 void RunImu(const ImuArgs& a) {
   IMUMATCH_CLI_REQUIRE(a.still_s >= 0.0, "--still must be >= 0");
+  IMUMATCH_CLI_REQUIRE(a.max_frames != 1,
+                       "--frames must be 0 (all) or at least 2: one frame has "
+                       "no interval to integrate over");
   DatasetOptions options;
   options.max_frames = a.max_frames;
   const Dataset d = LoadDataset(a.path, options);
@@ -68,7 +71,11 @@ void RunImu(const ImuArgs& a) {
             << " frames, " << d.imu.size() << " IMU samples\n"
             << d.imu_source_note << "\n";
   if (d.imu.empty()) throw InvalidArgument("the dataset has no IMU data");
-  IMUMATCH_CLI_REQUIRE(d.frames.size() >= 2, "need at least two frames");
+  if (d.frames.size() < 2) {
+    throw InputError(a.path, d.name + " has " + std::to_string(d.frames.size()) +
+                                 (d.frames.size() == 1 ? " frame" : " frames") +
+                                 ": the camera's frame intervals need at least two");
+  }
 
   const int64_t t_still0 = d.imu.begin_ns();
   const int64_t t_still1 = std::min(d.imu.end_ns(), t_still0 + SecondsToNs(a.still_s));

@@ -54,6 +54,9 @@ void RunTrackCommand(const TrackArgs& a) {
   o.monocular = a.monocular;
   o.front_end.prediction.scene_near.enabled = !a.fixed_segments;
   o.front_end.still_s = a.still_s;
+  IMUMATCH_CLI_REQUIRE(
+      a.max_frames != 1,
+      "--max-frames must be 0 (all) or at least 2: one frame has no pair to track");
   o.first_frame = a.first;
   o.max_frames = a.max_frames;
   o.keep_visuals = a.images;
@@ -86,11 +89,16 @@ void RunTrackCommand(const TrackArgs& a) {
     std::cerr << "imumatch: warning: " << w << "\n";
   }
   const size_t frames = source.dataset.frames.size();
-  if (frames < 2 || a.first > frames - 2) {
+  if (frames < 2) {
+    throw InputError(a.path, source.dataset.name + " has " + std::to_string(frames) +
+                                 (frames == 1 ? " frame" : " frames") +
+                                 ": tracking needs at least two");
+  }
+  if (a.first > frames - 2) {
     throw InvalidArgument("--first " + std::to_string(a.first) + ": " + source.dataset.name +
                           " has " + std::to_string(frames) +
                           " frames; tracking needs two from the first (at most --first " +
-                          std::to_string(frames < 2 ? 0 : frames - 2) + ")");
+                          std::to_string(frames - 2) + ")");
   }
   const size_t first = a.first;
   const size_t n = a.max_frames > 0 ? std::min(a.max_frames, source.dataset.frames.size() - first)

@@ -466,6 +466,21 @@ Dataset LoadSyntheticDataset(const std::string& root, const DatasetOptions& opti
     throw InputError(json_path, std::string("camera: ") + e.what());
   }
   d.camera = options.camera ? *options.camera : c;
+  // camera.txt is written beside sequence.json for TUM-style tools; the folder's camera is
+  // sequence.json's. One edited by hand would otherwise be ignored without a word.
+  const std::string camera_txt = (fs::path(root) / "camera.txt").string();
+  std::error_code camera_txt_ec;
+  if (!options.camera && fs::exists(camera_txt, camera_txt_ec)) {
+    const std::string use =
+        ": the camera used is sequence.json's (pass --camera " + camera_txt + " to use this one)";
+    try {
+      if (!ReadCameraFromText(camera_txt).SameImageGeometry(c)) {
+        d.warnings.push_back(camera_txt + " differs from sequence.json's camera" + use);
+      }
+    } catch (const Error& e) {
+      d.warnings.push_back(std::string(e.what()) + use);
+    }
+  }
 
   const Json& p = Need(j, "imu_params", json_path);
   d.imu_params.gyro_noise_density = NeedDouble(p, "gyro_noise_density", json_path);
@@ -508,7 +523,7 @@ Dataset LoadSyntheticDataset(const std::string& root, const DatasetOptions& opti
 
   // Frames, exact ground truth, velocities and the stored IMU.
   const TumRgbdFiles files = ReadTumRgbdFolder(root);
-  d.warnings = files.warnings;
+  d.warnings.insert(d.warnings.end(), files.warnings.begin(), files.warnings.end());
   d.frames = TumFrames(files, 1, options.check_files_exist,
                        &d.warnings);  // identical timestamps only
   d.groundtruth_world_from_cam = files.groundtruth;

@@ -114,8 +114,23 @@ TEST(SyntheticIo, WriteThenLoadRoundTripsExactly) {
   EXPECT_EQ(j.at("imu_simulated"), true);
   EXPECT_EQ(j.at("depth_noise"), true);
   EXPECT_EQ(j.at("cam_from_imu").size(), 4u);
-  // camera.txt is readable by the camera module.
+  // camera.txt is readable by the camera module, and as written it agrees with sequence.json.
   EXPECT_EQ(ReadCameraFromText(root + "/camera.txt").fx, seq.camera.fx);
+  EXPECT_TRUE(d.warnings.empty()) << ::testing::PrintToString(d.warnings);
+  // Edited by hand, it is not used (the folder's camera is sequence.json's), and that is said.
+  dir.Write("left30/camera.txt", "50 60 39.5 29.5 80 60 0 0 0 0 0\n");
+  const Dataset edited = LoadDataset(root);
+  EXPECT_EQ(edited.camera.fx, seq.camera.fx);
+  ASSERT_EQ(edited.warnings.size(), 1u);
+  EXPECT_NE(edited.warnings[0].find("camera.txt differs from sequence.json's camera"),
+            std::string::npos)
+      << edited.warnings[0];
+  dir.Write("left30/camera.txt", "50 0 39.5\n");
+  const Dataset broken = LoadDataset(root);
+  ASSERT_EQ(broken.warnings.size(), 1u);
+  EXPECT_NE(broken.warnings[0].find("camera.txt:"), std::string::npos) << broken.warnings[0];
+  EXPECT_NE(broken.warnings[0].find("the camera used is sequence.json's"), std::string::npos)
+      << broken.warnings[0];
 }
 
 // A lens survives the round trip: camera.txt names an equidistant lens and gives its k1..k4,
