@@ -104,11 +104,7 @@ void BindKlt(py::module_& m) {
         const MatView va = ArrayToMat(image_a, "image_a"), vb = ArrayToMat(image_b, "image_b");
         CheckGrayPair(va, vb);
         const cv::Mat &a = va.mat, &b = vb.mat;
-        if (a.cols != camera.width || a.rows != camera.height) {
-          throw InvalidArgument("image_a is " + std::to_string(a.cols) + "x" +
-                                std::to_string(a.rows) + ", the camera " +
-                                std::to_string(camera.width) + "x" + std::to_string(camera.height));
-        }
+        CheckCameraSize(a, "image_a", camera);
         const std::vector<cv::KeyPoint> kps = ToKeypoints(keypoints_a);
         if (predictions.items.size() != kps.size()) {
           throw InvalidArgument("track_klt: " + std::to_string(predictions.items.size()) +

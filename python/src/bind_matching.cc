@@ -346,6 +346,7 @@ then start at near_margin x the near_quantile of the depths its matches need.)")
           if (depth.mat.type() != CV_16UC1) {
             throw InvalidArgument("depth_image: expected a uint16 H x W array (raw units)");
           }
+          CheckCameraSize(depth.mat, "depth_image", camera);
           depths = SampleDepths(depth.mat, camera.depth_scale, kps, options.depth_sampling);
         }
         const PixelUndistorter undistorter(camera);
@@ -519,11 +520,15 @@ metre) or as metres per keypoint (<= 0 or NaN: none). Without depth: the epipola
         if (!depth.mat.empty() && depth.mat.type() != CV_16UC1) {
           throw InvalidArgument("depth_a: expected a uint16 H x W array (raw units)");
         }
+        if (!depth.mat.empty()) CheckCameraSize(depth.mat, "depth_a", camera);
         const MatView va = ArrayToMat(image_a, "image_a"), vb = ArrayToMat(image_b, "image_b");
         if (va.mat.empty() != vb.mat.empty()) {
           throw InvalidArgument("match_guided: give both images (for refinement) or neither");
         }
-        if (!va.mat.empty()) CheckGrayPair(va, vb);
+        if (!va.mat.empty()) {
+          CheckGrayPair(va, vb);
+          CheckCameraSize(va.mat, "image_a", camera);
+        }
         const cv::Mat &ia = va.mat, &ib = vb.mat;
         PyMatchResult out;
         out.guided = true;

@@ -78,6 +78,13 @@ void CheckGrayPair(const MatView& image_a, const MatView& image_b) {
   }
 }
 
+void CheckCameraSize(const cv::Mat& image, const char* what, const PinholeCamera& camera) {
+  if (image.cols == camera.width && image.rows == camera.height) return;
+  throw InvalidArgument(std::string(what) + " is " + std::to_string(image.cols) + "x" +
+                        std::to_string(image.rows) + ", the camera " +
+                        std::to_string(camera.width) + "x" + std::to_string(camera.height));
+}
+
 py::array MatToArray(cv::Mat mat) {
   const py::dtype dtype = DtypeOf(mat.depth());
   if (mat.empty()) {

@@ -10,6 +10,7 @@
 #include <pybind11/pybind11.h>
 #include <opencv2/core.hpp>
 
+#include "imumatch/camera/pinhole_camera.h"
 #include "imumatch/core/types.h"
 #include "imumatch/eval/frame_source.h"
 #include "imumatch/matching/match_types.h"
@@ -31,6 +32,11 @@ MatView ArrayToMat(const py::handle& object, const char* what);
 // Checks that image_a and image_b (as ArrayToMat gave them) are two 8-bit gray frames of one
 // size: InvalidArgument naming the one that is empty, not uint8 gray (H x W), or of another size.
 void CheckGrayPair(const MatView& image_a, const MatView& image_b);
+
+// Checks that an image given with a camera (a frame, a depth image) has the camera's size: a
+// keypoint's depth is read at its pixel and its patch around it, so another size would give
+// silently wrong depths and patches. InvalidArgument naming what and both sizes.
+void CheckCameraSize(const cv::Mat& image, const char* what, const PinholeCamera& camera);
 
 // A NumPy array that owns a copy-free reference to the Mat's buffer (the Mat is moved into a
 // capsule). An empty Mat gives an empty array of shape (0,) or (0, cols).

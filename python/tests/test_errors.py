@@ -74,6 +74,18 @@ def test_out_of_range_and_invalid_arguments():
                               image_b=np.zeros((240, 320), np.uint8))
     with pytest.raises(ValueError):
         imumatch.predict_keypoints(cam, motion, np.zeros((3, 5)))
+    # A depth image or frames of another size than the camera's: depths and patches would be read
+    # at the wrong pixels (they were, silently).
+    with pytest.raises(ValueError, match="depth_image is 10x10, the camera 640x480"):
+        imumatch.predict_keypoints(cam, motion, kps[:, :2],
+                                   depth_image=np.zeros((10, 10), np.uint16))
+    with pytest.raises(ValueError, match="depth_a is 320x240, the camera 640x480"):
+        imumatch.match_guided(cam, motion, kps, np.zeros((1, 32), np.uint8), kps,
+                              np.zeros((1, 32), np.uint8), depth_a=np.zeros((240, 320), np.uint16))
+    with pytest.raises(ValueError, match="image_a is 320x240, the camera 640x480"):
+        imumatch.match_guided(cam, motion, kps, np.zeros((1, 32), np.uint8), kps,
+                              np.zeros((1, 32), np.uint8), image_a=np.zeros((240, 320), np.uint8),
+                              image_b=np.zeros((240, 320), np.uint8))
 
 
 def rss_kib():
