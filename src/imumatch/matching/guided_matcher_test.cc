@@ -531,6 +531,10 @@ TEST(GuidedMatcherTest, CheckAndInputValidation) {
   EXPECT_EQ(r.stats.predicted_with_depth, 10);
   EXPECT_EQ(r.stats.matched, 10);
   for (const Match& m : r.matches) EXPECT_EQ(m.train_idx, s.partner[m.query_idx]);
+  // A depth image of another size than the camera's would be read at the wrong pixels: refused.
+  EXPECT_THROW(MatchFramesGuided(s.camera, s.motion, ka, s.desc_a, depth(cv::Rect(0, 0, 320, 240)),
+                                 kb, s.desc_b, PredictionOptions(), GuidedMatcherOptions()),
+               InvalidArgument);
 }
 
 }  // namespace

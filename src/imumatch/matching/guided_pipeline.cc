@@ -1,5 +1,6 @@
 #include "imumatch/matching/guided_pipeline.h"
 
+#include "imumatch/core/error.h"
 #include "imumatch/matching/depth_reading.h"
 #include "imumatch/matching/scene_depth.h"
 
@@ -27,6 +28,10 @@ MatchResult GuidedMatcherWorkspace::Match(const PinholeCamera& camera, const Cam
   // Depth is registered to the (distorted) image: sampled at the image positions. No depth image:
   // no depths (every keypoint is predicted along its epipolar segment).
   depths_.clear();
+  IMUMATCH_CHECK(depth_a.empty() || (depth_a.cols == camera.width && depth_a.rows == camera.height),
+                 "depth_a is " << depth_a.cols << "x" << depth_a.rows << ", the camera "
+                               << camera.width << "x" << camera.height
+                               << ": a depth image must be registered to the camera's pixels");
   if (!depth_a.empty()) {
     depths_ =
         SampleDepths(depth_a, camera.depth_scale, keypoints_a, prediction_options.depth_sampling);
