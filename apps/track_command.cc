@@ -31,6 +31,7 @@ struct TrackArgs {
   bool no_second_pass = false;
   bool no_neighbour_depth = false;
   bool monocular = false;
+  bool fixed_gyro_bias = false;
   bool fixed_segments = false;
   double still_s = 0.5;
   size_t first = 0;
@@ -52,6 +53,7 @@ void RunTrackCommand(const TrackArgs& a) {
   o.front_end.second_pass = !a.no_second_pass;
   o.front_end.neighbour_depth.enabled = !a.no_neighbour_depth;
   o.monocular = a.monocular;
+  o.front_end.learn_gyro_bias = !a.fixed_gyro_bias;
   o.front_end.prediction.scene_near.enabled = !a.fixed_segments;
   o.front_end.still_s = a.still_s;
   IMUMATCH_CLI_REQUIRE(
@@ -147,6 +149,9 @@ void AddTrackCommand(CLI::App& app) {
   cmd->add_flag("--no-neighbour-depth", a->no_neighbour_depth,
                 "second pass: search keypoints without depth along their whole segment, not along "
                 "the inverse depths their matched neighbours show");
+  cmd->add_flag("--fixed-gyro-bias", a->fixed_gyro_bias,
+                "keep the still start's gyro bias (do not learn it from the rotations the fitted "
+                "motions measure)");
   cmd->add_flag("--monocular", a->monocular,
                 "give the front end no depth images (a monocular camera); where the dataset has "
                 "them they only judge the matches");

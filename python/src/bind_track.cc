@@ -96,12 +96,15 @@ void BindTrack(py::module_& m) {
   py::class_<FrontEnd>(m, "FrontEnd", R"(The front end one frame at a time, as `track` runs it over
 a dataset: feed the IMU samples in time order (add_imu, at least up to each frame's time), then
 the frame (process). It initialises gravity and the gyro bias from the first still_s seconds of
-IMU, predicts each frame's keypoints from the IMU and the previous frame, matches them (guided,
-or brute force as the fallback), fits the motion and keeps the estimated pose.)")
+IMU (and with learn_gyro_bias goes on learning the bias from the rotations its fits measure, also
+from zero when the log does not start still), predicts each frame's keypoints from the IMU and the
+previous frame, matches them (guided, or brute force as the fallback), fits the motion and keeps
+the estimated pose.)")
       .def(py::init([](const PinholeCamera& camera, const ImuParams& imu_params,
                        const Rigid3d& cam_from_imu, const std::string& detector, int max_keypoints,
-                       bool hybrid, bool second_pass, double still_s) {
+                       bool hybrid, bool second_pass, double still_s, bool learn_gyro_bias) {
              FrontEndOptions o;
+             o.learn_gyro_bias = learn_gyro_bias;
              o.features.kind = ParseDetectorKind(detector);
              o.features.max_keypoints = max_keypoints;
              o.hybrid = hybrid;
@@ -113,6 +116,7 @@ or brute force as the fallback), fits the motion and keeps the estimated pose.)"
            py::arg("camera"), py::arg("imu_params"), py::arg("cam_from_imu"),
            py::arg("detector") = "orb", py::arg("max_keypoints") = 1000, py::arg("hybrid") = false,
            py::arg("second_pass") = true, py::arg("still_s") = 0.5,
+           py::arg("learn_gyro_bias") = true,
            "camera: PinholeCamera; imu_params: ImuParams (noise model); cam_from_imu: Rigid3d.")
       .def(
           "add_imu",
@@ -151,13 +155,17 @@ sub-pixel positions in this frame, NaN when not refined), "matches_pass1", "seco
 an empty image, or a time not after the previous frame's.)")
       .def_property_readonly(
           "notes", [](const FrontEnd& fe) { return fe.notes(); },
-          "What the front end noted (initialisation, bias), one line each.");
+          "What the front end noted (initialisation, bias), one line each.")
+      .def_property_readonly(
+          "gyro_bias", [](const FrontEnd& fe) { return Eigen::Vector3d(fe.gyro_bias()); },
+          "The gyro bias in use (rad/s, IMU frame): the still start's, then the learnt one.");
 
   m.def(
       "track",
       [](const py::object& dataset, const std::string& detector, int max_keypoints, bool hybrid,
-         bool second_pass, bool monocular, double still_s, size_t first_frame, size_t max_frames,
-         const std::vector<double>& thresholds_px, const std::string& imu_model, uint64_t seed) {
+         bool second_pass, bool monocular, double still_s, bool learn_gyro_bias, size_t first_frame,
+         size_t max_frames, const std::vector<double>& thresholds_px, const std::string& imu_model,
+         uint64_t seed) {
         // A missing image is a bad frame, as in `imumatch track`.
         const EvalSource source =
             SourceFromPython(dataset, imu_model, seed, /*check_files_exist=*/false);
@@ -167,6 +175,7 @@ an empty image, or a time not after the previous frame's.)")
         o.front_end.hybrid = hybrid;
         o.front_end.second_pass = second_pass;
         o.front_end.still_s = still_s;
+        o.front_end.learn_gyro_bias = learn_gyro_bias;
         o.monocular = monocular;
         o.first_frame = first_frame;
         o.max_frames = max_frames;
@@ -202,12 +211,12 @@ an empty image, or a time not after the previous frame's.)")
       },
       py::arg("dataset"), py::arg("detector") = "orb", py::arg("max_keypoints") = 1000,
       py::arg("hybrid") = false, py::arg("second_pass") = true, py::arg("monocular") = false,
-      py::arg("still_s") = 0.5, py::arg("first_frame") = 0, py::arg("max_frames") = 0,
-      py::arg("thresholds_px") = std::vector<double>{1.0, 3.0, 8.0}, py::arg("imu_model") = "euroc",
-      py::arg("seed") = 42,
+      py::arg("still_s") = 0.5, py::arg("learn_gyro_bias") = true, py::arg("first_frame") = 0,
+      py::arg("max_frames") = 0, py::arg("thresholds_px") = std::vector<double>{1.0, 3.0, 8.0},
+      py::arg("imu_model") = "euroc", py::arg("seed") = 42,
       R"(Runs the front end as `imumatch track` does: the dataset (a path, a Dataset or a
 SyntheticSequence) fed frame by frame with its IMU, no ground truth given to it; gravity and gyro
-bias from the first still_s seconds. Returns {"frames": [per frame: status ('first', 'guided' or
+bias from the first still_s seconds, the bias then learnt from the fits (learn_gyro_bias). Returns {"frames": [per frame: status ('first', 'guided' or
 'brute_force'), event, matches (final pass), matches_pass1, world_from_cam (Rigid3d, None
 while the IMU initialises), velocity, precision per threshold and relative pose error to the
 previous frame when the dataset has ground truth], "notes", "fallbacks", "rpe" (RMSE and mean,

@@ -138,6 +138,15 @@ TrackRunResult RunTrack(const EvalSource& source, const TrackRunOptions& options
     if (options.progress) options.progress(k - first + 1, end - first);
   }
   out.notes = fe.notes();
+  if (const GyroBiasFilter* filter = fe.gyro_bias_filter(); filter != nullptr) {
+    std::ostringstream note;
+    note << std::scientific << std::setprecision(2)
+         << "gyro bias learnt from the fitted rotations: " << fe.gyro_bias().x() << " "
+         << fe.gyro_bias().y() << " " << fe.gyro_bias().z() << " rad/s (+- " << fe.gyro_bias_sigma()
+         << " at its last update), " << filter->updates() << " updates, " << filter->rejected()
+         << " rejected by the gate";
+    out.notes.push_back(note.str());
+  }
   out.has_truth =
       std::any_of(truth.begin(), truth.end(), [](const auto& t) { return t.has_value(); });
   if (out.has_truth) out.rpe = ComputeRelativePoseError(estimated, truth);

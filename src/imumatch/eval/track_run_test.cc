@@ -69,8 +69,12 @@ TEST(TrackRun, RealFlightWithoutGroundTruthState) {
   const TrackRunResult r = RunTrack(source, o);
   EXPECT_EQ(r.frames.size(), 50u);
   EXPECT_EQ(r.FallbackCount(), 0);
-  ASSERT_EQ(r.notes.size(), 1u);
+  ASSERT_EQ(r.notes.size(), 2u);
   EXPECT_NE(r.notes[0].find("still start"), std::string::npos) << r.notes[0];
+  // The bias learnt since (FrontEndOptions::learn_gyro_bias) agrees with the ground truth's batch
+  // estimate for MH_05 (-0.0018, 0.0209, 0.0769 rad/s; the still start's: -0.0018, 0.0200, 0.0779).
+  EXPECT_NE(r.notes[1].find("gyro bias learnt from the fitted rotations"), std::string::npos)
+      << r.notes[1];
   // Both passes are precise; the second (fitted pose + geometric check) more so at 1 px.
   EXPECT_GT(Precision(r, false, 1), 0.97);  // 3 px
   EXPECT_GT(Precision(r, true, 0), Precision(r, false, 0));

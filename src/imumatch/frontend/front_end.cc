@@ -29,6 +29,7 @@ void FrontEndOptions::Check() const {
   pose.Check();
   refit.Check();
   neighbour_depth.Check();
+  gyro_bias_filter.Check();
   IMUMATCH_CHECK(std::isfinite(still_s) && still_s >= 0.0 && still_s <= 3600.0,
                  "still_s=" << still_s);
   IMUMATCH_CHECK(std::isfinite(unknown_velocity_sigma) && unknown_velocity_sigma > 0.0,
@@ -65,6 +66,8 @@ FrontEnd::FrontEnd(const PinholeCamera& camera, const ImuParams& imu_params,
   imu_params.Check();
   options.Check();
   velocity_sigma_ = options.unknown_velocity_sigma;
+  // The bias filter is fed the rotation the matches alone measure: a second solve of each fit.
+  if (options_.learn_gyro_bias && !options_.bias) options_.refit.measure_rotation = true;
 }
 
 void FrontEnd::AddImu(const ImuSample& sample) { imu_.Push(sample, "front end IMU stream"); }
@@ -92,8 +95,10 @@ void FrontEnd::Initialise(int64_t t_ns, FrontEndResult& result) {
   const int64_t t0 = imu_.begin_ns();
   const int64_t t1 = std::min(t_ns, t0 + SecondsToNs(options_.still_s));
   Rigid3d world_from_imu;
+  bool bias_from_still = false;
   try {
     const StillInitialization init = InitializeFromStill(imu_, t0, t1, imu_params_);
+    bias_from_still = true;
     world_from_imu = init.world_from_imu;
     bias_ = init.bias;
     gyro_bias_sigma_ = init.gyro_bias_sigma;
@@ -121,6 +126,12 @@ void FrontEnd::Initialise(int64_t t_ns, FrontEndResult& result) {
     note << "; the given bias is used";
   }
   bias_t_ns_ = t1;
+  if (options_.learn_gyro_bias && !options_.bias) {
+    if (!bias_from_still) gyro_bias_sigma_ = options_.gyro_bias_filter.unknown_bias_sigma;
+    gyro_bias_filter_.emplace(bias_.gyro, gyro_bias_sigma_, imu_params_.gyro_random_walk, t1,
+                              options_.gyro_bias_filter);
+    note << "; the gyro bias is then learnt from the rotations the fitted motions measure";
+  }
   // From rest at t1 to the frame: the velocity's error grows with the accelerometer bias, which a
   // still start does not reveal.
   NavState state;
@@ -203,6 +214,21 @@ std::vector<Match> FrontEnd::MatchPass(const CameraMotion& motion, const Feature
   }
   out.insert(out.end(), r.matches.begin(), r.matches.end());
   return out;
+}
+
+void FrontEnd::LearnGyroBias(const MotionRefit& refit, int64_t t_a_ns, int64_t t_b_ns) {
+  if (!gyro_bias_filter_) return;
+  const std::optional<ImuRotationMeasurement> measured = ImuRotationFromFit(refit, cam_from_imu_);
+  if (!measured) return;
+  try {
+    gyro_bias_filter_->Update(imu_.Slice(t_a_ns, t_b_ns), imu_params_, measured->imu_a_from_imu_b,
+                              measured->covariance);
+  } catch (const Error&) {
+    return;  // an interval the filter cannot use (across an IMU gap, before its last update)
+  }
+  bias_.gyro = gyro_bias_filter_->bias();
+  gyro_bias_sigma_ = gyro_bias_filter_->SigmaAt(t_b_ns);
+  bias_t_ns_ = t_b_ns;
 }
 
 FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
@@ -382,6 +408,7 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
     if (refit.ok) {
       refined = refit.motion;
       fitted = refit.motion.cam_b_from_cam_a;
+      LearnGyroBias(refit, prev.t_ns, frame.t_ns);
     }
     std::vector<KeypointPrediction> predictions2;
     int tracks2 = 0;

@@ -14,6 +14,7 @@
 #include "imumatch/frontend/motion_refit.h"
 #include "imumatch/frontend/pose_estimation.h"
 #include "imumatch/imu/camera_motion.h"
+#include "imumatch/imu/gyro_bias_filter.h"
 #include "imumatch/imu/imu_buffer.h"
 #include "imumatch/imu/imu_params.h"
 #include "imumatch/matching/guided_matcher.h"
@@ -63,6 +64,13 @@ struct FrontEndOptions {
   // Gravity and gyro bias from the first still_s seconds of the IMU stream.
   double still_s = 1.0;
   std::optional<ImuBias> bias;  // given: used instead of the still estimate
+  // The gyro bias learnt from the rotations that the second pass's fits measure (GyroBiasFilter
+  // fed by ImuRotationFromFit, as eval does): starting from the still start's estimate, or from
+  // zero with gyro_bias_filter.unknown_bias_sigma when the log does not start still (a MEMS gyro's
+  // bias left in the IMU's rotation misplaces every window: MH_05's is 0.23 deg per frame). Off,
+  // or with `bias` given: the bias stays what initialisation set.
+  bool learn_gyro_bias = true;
+  GyroBiasFilterOptions gyro_bias_filter;
   // Velocity uncertainty (m/s per axis) when nothing constrains it: after a loss or an IMU gap.
   double unknown_velocity_sigma = 1.0;
   double min_velocity_sigma = 0.02;
@@ -136,6 +144,13 @@ class FrontEnd {
   // Initialisation notes (bias and gravity source), one line each.
   const std::vector<std::string>& notes() const { return notes_; }
   const FrontEndOptions& options() const { return options_; }
+  // The gyro bias in use (rad/s, IMU frame), and its filter when the bias is learnt (nullptr before
+  // initialisation or when learn_gyro_bias is off): updates(), rejected(), SigmaAt().
+  const Eigen::Vector3d& gyro_bias() const { return bias_.gyro; }
+  double gyro_bias_sigma() const { return gyro_bias_sigma_; }  // 1-sigma when last set
+  const GyroBiasFilter* gyro_bias_filter() const {
+    return gyro_bias_filter_ ? &*gyro_bias_filter_ : nullptr;
+  }
 
  private:
   struct Previous {
@@ -148,6 +163,9 @@ class FrontEnd {
     Rigid3d world_from_cam;
   };
   void Initialise(int64_t t_ns, FrontEndResult& result);
+  // Feeds the rotation the refit measured between t_a and t_b to the gyro bias filter (when the
+  // bias is learnt) and takes its bias for the next frames.
+  void LearnGyroBias(const MotionRefit& refit, int64_t t_a_ns, int64_t t_b_ns);
   // patch_look: add MatchByPatch's matches (options_.patch_second_look permitting). first_pass:
   // the first pass's matches, whose depths narrow the segments (options_.neighbour_depth), or null.
   // scene: set to the segments' near end the pass finds (PredictKeypointsInScene); a second pass
@@ -179,6 +197,7 @@ class FrontEnd {
   ImuBias bias_;
   double gyro_bias_sigma_ = 0.0;
   int64_t bias_t_ns_ = 0;
+  std::optional<GyroBiasFilter> gyro_bias_filter_;
 };
 
 }  // namespace imumatch
