@@ -96,6 +96,9 @@ void FrontEnd::Initialise(int64_t t_ns, FrontEndResult& result) {
   const int64_t t1 = std::min(t_ns, t0 + SecondsToNs(options_.still_s));
   Rigid3d world_from_imu;
   bool bias_from_still = false;
+  // Where the state starts: at rest at the end of the still start, propagated to the frame; or,
+  // when the log does not start still, at the frame itself with the velocity unknown.
+  int64_t state_t_ns = t1;
   try {
     const StillInitialization init = InitializeFromStill(imu_, t0, t1, imu_params_);
     bias_from_still = true;
@@ -107,54 +110,69 @@ void FrontEnd::Initialise(int64_t t_ns, FrontEndResult& result) {
          << " rad/s";
     if (init.end_ns < t1) note << " (the still period ends at an IMU gap)";
   } catch (const Error& e) {
-    // Not still (or too short): gravity from the mean specific force, no bias estimate. The
-    // recorded samples are averaged directly: a gap in the log does not matter to a mean.
+    // Not still (or too short): the state starts at the frame, gravity from the mean specific
+    // force of the IMU just before it (still_s, at least 0.2 s), no bias estimate, the velocity
+    // unknown. "At rest" at the log's start, propagated to a frame that may come many seconds
+    // later (MH_05's first frame comes 20 s into its log), would be a guess that every second of
+    // integration makes worse. The recorded samples are averaged directly: a gap in the log does
+    // not matter to a mean.
+    state_t_ns = t_ns;
+    const int64_t from =
+        std::max(t0, t_ns - std::max(SecondsToNs(options_.still_s), SecondsToNs(0.2)));
     Eigen::Vector3d f = Eigen::Vector3d::Zero();
-    for (const ImuSample& s : imu_.samples()) {  // from t0, the first sample
-      if (s.t_ns > t1) break;
-      f += s.accel_m_s2;
+    for (const ImuSample& s : imu_.samples()) {
+      if (s.t_ns > t_ns) break;
+      if (s.t_ns >= from) f += s.accel_m_s2;
     }
     world_from_imu = Rigid3d(AttitudeFromGravity(f), Eigen::Vector3d::Zero());
     bias_ = ImuBias();
     gyro_bias_sigma_ = options_.motion.gyro_bias_sigma;
     note << "the IMU's start is not still (" << e.what()
-         << "): gravity from its mean, gyro bias assumed zero";
+         << "): gravity from its mean before the frame, gyro bias assumed zero";
   }
   if (options_.bias) {
     bias_ = *options_.bias;
     gyro_bias_sigma_ = options_.motion.gyro_bias_sigma;
     note << "; the given bias is used";
   }
-  bias_t_ns_ = t1;
+  bias_t_ns_ = state_t_ns;
   if (options_.learn_gyro_bias && !options_.bias) {
     if (!bias_from_still) gyro_bias_sigma_ = options_.gyro_bias_filter.unknown_bias_sigma;
-    gyro_bias_filter_.emplace(bias_.gyro, gyro_bias_sigma_, imu_params_.gyro_random_walk, t1,
-                              options_.gyro_bias_filter);
+    gyro_bias_filter_.emplace(bias_.gyro, gyro_bias_sigma_, imu_params_.gyro_random_walk,
+                              state_t_ns, options_.gyro_bias_filter);
     note << "; the gyro bias is then learnt from the rotations the fitted motions measure";
   }
   // From rest at t1 to the frame: the velocity's error grows with the accelerometer bias, which a
   // still start does not reveal.
   NavState state;
-  state.t_ns = t1;
+  state.t_ns = state_t_ns;
   state.world_from_imu = world_from_imu;
-  if (t_ns > t1) {
+  if (t_ns > state_t_ns) {
     try {
-      const ImuPreintegration pim = Preintegrate(imu_.Slice(t1, t_ns), bias_, imu_params_);
+      const ImuPreintegration pim = Preintegrate(imu_.Slice(state_t_ns, t_ns), bias_, imu_params_);
       state = Propagate(state, pim, imu_params_.gravity_in_world);
     } catch (const Error& e) {
       note << "; IMU not propagated to the first frame (" << e.what() << ")";
     }
   }
-  const double since = NsToSeconds(t_ns - t1);
   world_from_imu_ = Rigid3d(state.world_from_imu.rotation, Eigen::Vector3d::Zero());
   velocity_ = state.velocity_in_world;
-  velocity_sigma_ =
-      std::max(options_.min_velocity_sigma,
-               std::hypot(options_.min_velocity_sigma, options_.motion.accel_bias_sigma * since));
-  velocity_fix_sigma_ = options_.min_velocity_sigma;  // at rest at t1
-  velocity_fix_t_ns_ = t1;
-  note << "; velocity propagated from rest over " << std::fixed << std::setprecision(2) << since
-       << " s (sigma " << velocity_sigma_ << " m/s)";
+  if (bias_from_still) {
+    const double since = NsToSeconds(t_ns - t1);
+    velocity_sigma_ =
+        std::max(options_.min_velocity_sigma,
+                 std::hypot(options_.min_velocity_sigma, options_.motion.accel_bias_sigma * since));
+    velocity_fix_sigma_ = options_.min_velocity_sigma;  // at rest at t1
+    velocity_fix_t_ns_ = t1;
+    note << "; velocity propagated from rest over " << std::fixed << std::setprecision(2) << since
+         << " s (sigma " << velocity_sigma_ << " m/s)";
+  } else {
+    velocity_sigma_ = options_.unknown_velocity_sigma;
+    velocity_fix_sigma_ = options_.unknown_velocity_sigma;
+    velocity_fix_t_ns_ = t_ns;
+    note << "; velocity unknown (zero, sigma " << std::fixed << std::setprecision(2)
+         << velocity_sigma_ << " m/s)";
+  }
   notes_.push_back(note.str());
   result.event = notes_.back();
   initialised_ = true;

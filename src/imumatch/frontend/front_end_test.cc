@@ -172,7 +172,13 @@ TEST(FrontEnd, WithoutAStillStartTheGyroBiasIsLearntFromTheFits) {
     std::string first_event;
     for (size_t k = 0; k < seq.frames.size(); ++k) {
       const FrontEndResult r = runner.Next(k);
-      if (r.status == FrameStatus::kFirst && !r.event.empty()) first_event = r.event;
+      if (r.status == FrameStatus::kFirst && r.has_state) {
+        first_event = r.event;
+        // The state starts at the frame with the velocity unknown, not "at rest" at the log's
+        // start and propagated.
+        EXPECT_EQ(r.velocity_sigma, o.unknown_velocity_sigma);
+        EXPECT_NE(r.event.find("velocity unknown"), std::string::npos) << r.event;
+      }
       if (r.status != FrameStatus::kGuided || k == 0) continue;
       const Rigid3d truth =
           seq.frames[k].world_from_cam.Inverse() * seq.frames[k - 1].world_from_cam;

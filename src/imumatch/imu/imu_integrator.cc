@@ -149,8 +149,9 @@ StillInitialization InitializeFromStill(const ImuBuffer& buffer, int64_t t0_ns, 
                                         const ImuParams& params, double max_gyro_drift,
                                         double max_accel_drift) {
   params.Check();
-  const int64_t end_ns = buffer.GapFreeEnd(t0_ns, t1_ns);
   // Plain messages (no "check ... failed"): callers show them to users in notes.
+  if (t1_ns <= t0_ns) throw InvalidArgument("no still period was asked for (its length is 0)");
+  const int64_t end_ns = buffer.GapFreeEnd(t0_ns, t1_ns);
   if (end_ns <= t0_ns) {
     throw InvalidArgument("the still period ends at once: an IMU gap follows " +
                           FormatNsAsSeconds(t0_ns) + " s");
