@@ -77,13 +77,16 @@ double PinholeCamera::EquidistantRadius(double theta, double* derivative) const 
 double PinholeCamera::EquidistantAngle(double radius) const { return KbAngle(distortion, radius); }
 
 void PinholeCamera::Check() const {
-  IMUMATCH_CHECK(width > 0 && height > 0 && width <= kMaxSide && height <= kMaxSide,
-                 "image size " << width << "x" << height << " (1.." << kMaxSide << " a side)");
+  IMUMATCH_CHECK(
+      width > 0 && height > 0 && width <= kMaxSide && height <= kMaxSide,
+      "image size " << width << "x" << height << " must be 1.." << kMaxSide << " pixels a side");
   IMUMATCH_CHECK(std::isfinite(fx) && fx > 0 && std::isfinite(fy) && fy > 0,
-                 "focal lengths fx=" << fx << " fy=" << fy);
+                 "focal lengths fx=" << fx << " fy=" << fy << " must be finite and positive");
   IMUMATCH_CHECK(std::isfinite(cx) && std::isfinite(cy),
                  "principal point cx=" << cx << " cy=" << cy << " is not finite");
-  IMUMATCH_CHECK(std::isfinite(depth_scale) && depth_scale > 0, "depth_scale=" << depth_scale);
+  IMUMATCH_CHECK(
+      std::isfinite(depth_scale) && depth_scale > 0,
+      "depth_scale=" << depth_scale << " must be finite and positive (raw depth units per metre)");
   for (size_t i = 0; i < distortion.size(); ++i) {
     IMUMATCH_CHECK(std::isfinite(distortion[i]),
                    "distortion coefficient " << i + 1 << " of 5 is " << distortion[i]);
