@@ -139,6 +139,7 @@ TrackRunResult RunTrack(const EvalSource& source, const TrackRunOptions& options
   }
   out.notes = fe.notes();
   if (const GyroBiasFilter* filter = fe.gyro_bias_filter(); filter != nullptr) {
+    out.learnt_gyro_bias = fe.gyro_bias();
     std::ostringstream note;
     note << std::scientific << std::setprecision(2)
          << "gyro bias learnt from the fitted rotations: " << fe.gyro_bias().x() << " "

@@ -2,6 +2,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -45,6 +46,8 @@ struct TrackRunResult {
   std::vector<TrackFrameRecord> frames;
   std::vector<std::string> notes;
   bool has_truth = false;
+  // The gyro bias (rad/s, IMU frame) the front end learnt from its fits, when it learnt one.
+  std::optional<Eigen::Vector3d> learnt_gyro_bias;
   RelativePoseError rpe;
   std::vector<PairVisual> visuals;
   double wall_s = 0.0;

@@ -75,6 +75,10 @@ TEST(TrackRun, RealFlightWithoutGroundTruthState) {
   // estimate for MH_05 (-0.0018, 0.0209, 0.0769 rad/s; the still start's: -0.0018, 0.0200, 0.0779).
   EXPECT_NE(r.notes[1].find("gyro bias learnt from the fitted rotations"), std::string::npos)
       << r.notes[1];
+  ASSERT_TRUE(r.learnt_gyro_bias.has_value());
+  EXPECT_LT((*r.learnt_gyro_bias - Eigen::Vector3d(-0.0018, 0.0209, 0.0769)).cwiseAbs().maxCoeff(),
+            0.003)
+      << r.learnt_gyro_bias->transpose();
   // Both passes are precise; the second (fitted pose + geometric check) more so at 1 px.
   EXPECT_GT(Precision(r, false, 1), 0.97);  // 3 px
   EXPECT_GT(Precision(r, true, 0), Precision(r, false, 0));
