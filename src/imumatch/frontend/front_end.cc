@@ -142,8 +142,8 @@ void FrontEnd::Initialise(int64_t t_ns, FrontEndResult& result) {
                               state_t_ns, options_.gyro_bias_filter);
     note << "; the gyro bias is then learnt from the rotations the fitted motions measure";
   }
-  // From rest at t1 to the frame: the velocity's error grows with the accelerometer bias, which a
-  // still start does not reveal.
+  // After a still start, from rest at t1 to the frame: the velocity's error grows with the
+  // accelerometer bias, which a still start does not reveal. Without one, nothing to propagate.
   NavState state;
   state.t_ns = state_t_ns;
   state.world_from_imu = world_from_imu;
