@@ -150,8 +150,8 @@ void AddTrackCommand(CLI::App& app) {
                 "second pass: search keypoints without depth along their whole segment, not along "
                 "the inverse depths their matched neighbours show");
   cmd->add_flag("--fixed-gyro-bias", a->fixed_gyro_bias,
-                "keep the still start's gyro bias (do not learn it from the rotations the fitted "
-                "motions measure)");
+                "without a still start, keep the gyro bias at zero (do not learn it from the "
+                "rotations the fitted motions measure; after a still start it is never learnt)");
   cmd->add_flag("--monocular", a->monocular,
                 "give the front end no depth images (a monocular camera); where the dataset has "
                 "them they only judge the matches");

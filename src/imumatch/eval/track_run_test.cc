@@ -1,8 +1,11 @@
 // `track` on data with ground truth that the front end never sees: a synthetic seed motion from
 // rest (exact truth) and the real EuRoC MH_05 flight; compared with `eval`, which is given the
 // ground-truth state.
+#include <iostream>
+
 #include <gtest/gtest.h>
 
+#include "imumatch/core/time.h"
 #include "imumatch/eval/evaluation.h"
 #include "imumatch/eval/summary.h"
 #include "imumatch/eval/track_run.h"
@@ -69,20 +72,52 @@ TEST(TrackRun, RealFlightWithoutGroundTruthState) {
   const TrackRunResult r = RunTrack(source, o);
   EXPECT_EQ(r.frames.size(), 50u);
   EXPECT_EQ(r.FallbackCount(), 0);
-  ASSERT_EQ(r.notes.size(), 2u);
-  EXPECT_NE(r.notes[0].find("still start"), std::string::npos) << r.notes[0];
-  // The bias learnt since (FrontEndOptions::learn_gyro_bias) agrees with the ground truth's batch
-  // estimate for MH_05 (-0.0018, 0.0209, 0.0769 rad/s; the still start's: -0.0018, 0.0200, 0.0779).
-  EXPECT_NE(r.notes[1].find("gyro bias learnt from the fitted rotations"), std::string::npos)
-      << r.notes[1];
-  ASSERT_TRUE(r.learnt_gyro_bias.has_value());
-  EXPECT_LT((*r.learnt_gyro_bias - Eigen::Vector3d(-0.0018, 0.0209, 0.0769)).cwiseAbs().maxCoeff(),
-            0.003)
-      << r.learnt_gyro_bias->transpose();
+  ASSERT_EQ(r.notes.size(), 1u);
+  // The drone stands on the ground before frame 0 (20 s into the log): the still window is the
+  // IMU just before it, and the bias from there is kept (not learnt).
+  EXPECT_NE(r.notes[0].find("still IMU just before the first frame"), std::string::npos)
+      << r.notes[0];
+  EXPECT_FALSE(r.learnt_gyro_bias.has_value());
   // Both passes are precise; the second (fitted pose + geometric check) more so at 1 px.
   EXPECT_GT(Precision(r, false, 1), 0.97);  // 3 px
   EXPECT_GT(Precision(r, true, 0), Precision(r, false, 0));
   EXPECT_EQ(r.rpe.pairs(), 49u);
+}
+
+// The same flight with its IMU log cut to start 0.2 s before frame 50, in flight: no still start,
+// so the gyro bias is learnt from zero (FrontEndOptions::learn_gyro_bias); kept at zero, its 0.23
+// deg per frame stays in the IMU's rotation.
+TEST(TrackRun, RealFlightStartingInFlightLearnsTheGyroBias) {
+  Dataset d = LoadDataset(testing::DataPath("euroc_mh05_flight"), DatasetOptions());
+  const int64_t from = d.frames[50].t_ns - SecondsToNs(0.2);
+  ImuBuffer cut;
+  for (const ImuSample& s : d.imu.samples()) {
+    if (s.t_ns >= from) cut.Push(s);
+  }
+  d.imu = std::move(cut);
+  const EvalSource source = MakeDiskSource(std::move(d));
+  TrackRunOptions o;
+  o.first_frame = 50;
+  o.max_frames = 100;
+  const TrackRunResult learnt = RunTrack(source, o);
+  o.front_end.learn_gyro_bias = false;
+  const TrackRunResult fixed = RunTrack(source, o);
+  ASSERT_TRUE(learnt.learnt_gyro_bias.has_value());
+  EXPECT_FALSE(fixed.learnt_gyro_bias.has_value());
+  std::cout << "learnt bias " << learnt.learnt_gyro_bias->transpose()
+            << "; rotation RMSE per frame learnt " << learnt.rpe.rmse_rotation_deg << " deg, fixed "
+            << fixed.rpe.rmse_rotation_deg << " deg\n";
+  // The ground truth's batch estimate for MH_05: -0.0018, 0.0209, 0.0769 rad/s. The pitch axis
+  // (y) is learnt least well, 0.012 rad/s low over these 100 frames without depth
+  // (docs/REAL_FLIGHT.md: the epipolar fits' pitch / yaw excess, which the filter's gate does not
+  // catch); the yaw axis, which carries most of it, to 0.005.
+  EXPECT_NEAR(learnt.learnt_gyro_bias->z(), 0.0769, 0.005);
+  EXPECT_LT(
+      (*learnt.learnt_gyro_bias - Eigen::Vector3d(-0.0018, 0.0209, 0.0769)).cwiseAbs().maxCoeff(),
+      0.015)
+      << learnt.learnt_gyro_bias->transpose();
+  EXPECT_GT(fixed.rpe.rmse_rotation_deg, 0.15);
+  EXPECT_LT(learnt.rpe.rmse_rotation_deg, 0.5 * fixed.rpe.rmse_rotation_deg);
 }
 
 }  // namespace

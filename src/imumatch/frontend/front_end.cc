@@ -66,8 +66,6 @@ FrontEnd::FrontEnd(const PinholeCamera& camera, const ImuParams& imu_params,
   imu_params.Check();
   options.Check();
   velocity_sigma_ = options.unknown_velocity_sigma;
-  // The bias filter is fed the rotation the matches alone measure: a second solve of each fit.
-  if (options_.learn_gyro_bias && !options_.bias) options_.refit.measure_rotation = true;
 }
 
 void FrontEnd::AddImu(const ImuSample& sample) { imu_.Push(sample, "front end IMU stream"); }
@@ -92,22 +90,44 @@ void FrontEnd::Initialise(int64_t t_ns, FrontEndResult& result) {
                    " s of IMU before a frame to initialise gravity and the gyro bias";
     return;
   }
-  const int64_t t0 = imu_.begin_ns();
-  const int64_t t1 = std::min(t_ns, t0 + SecondsToNs(options_.still_s));
+  // The still window: the still_s seconds just before the frame when the IMU is still there, so
+  // that the state starts at rest at the frame itself; else the log's first still_s seconds, and
+  // the state is propagated from there to the frame. Over a long wait that propagation tilts the
+  // attitude by the gyro's noise and drifts the velocity by the accelerometer's bias: MH_05's
+  // first frame comes 20 s into its log, where the drone still stands, and the velocity
+  // propagated to it read 1.9 m/s; the tilt stays in every later frame's gravity (the relative
+  // pose error without depth, frames 100-199, 64 mm RMSE per frame from the log's start, 14 mm
+  // from the frame's). Still means at rest here as at the log's start: an IMU cannot tell rest
+  // from a constant velocity.
+  const int64_t still_ns = SecondsToNs(options_.still_s);
+  int64_t t0 = imu_.begin_ns();
+  int64_t t1 = std::min(t_ns, t0 + still_ns);
+  std::optional<StillInitialization> before_frame;
+  if (still_ns > 0 && t_ns - still_ns > t0) {
+    try {
+      before_frame = InitializeFromStill(imu_, t_ns - still_ns, t_ns, imu_params_);
+      t0 = t_ns - still_ns;
+      t1 = t_ns;
+    } catch (const Error&) {
+      // Not still before the frame: the log's start is tried.
+    }
+  }
   Rigid3d world_from_imu;
   bool bias_from_still = false;
-  // Where the state starts: at rest at the end of the still start, propagated to the frame; or,
+  // Where the state starts: at rest at the end of the still window, propagated to the frame; or,
   // when the log does not start still, at the frame itself with the velocity unknown.
   int64_t state_t_ns = t1;
   try {
-    const StillInitialization init = InitializeFromStill(imu_, t0, t1, imu_params_);
+    const StillInitialization init =
+        before_frame ? *before_frame : InitializeFromStill(imu_, t0, t1, imu_params_);
     bias_from_still = true;
     world_from_imu = init.world_from_imu;
     bias_ = init.bias;
     gyro_bias_sigma_ = init.gyro_bias_sigma;
-    note << "gravity and gyro bias from the still start of the IMU (" << init.num_samples
-         << " samples): bias " << bias_.gyro.x() << " " << bias_.gyro.y() << " " << bias_.gyro.z()
-         << " rad/s";
+    note << "gravity and gyro bias from the still "
+         << (before_frame ? "IMU just before the first frame" : "start of the IMU") << " ("
+         << init.num_samples << " samples): bias " << bias_.gyro.x() << " " << bias_.gyro.y() << " "
+         << bias_.gyro.z() << " rad/s";
     if (init.end_ns < t1) note << " (the still period ends at an IMU gap)";
   } catch (const Error& e) {
     // Not still (or too short): the state starts at the frame, gravity from the mean specific
@@ -117,8 +137,7 @@ void FrontEnd::Initialise(int64_t t_ns, FrontEndResult& result) {
     // integration makes worse. The recorded samples are averaged directly: a gap in the log does
     // not matter to a mean.
     state_t_ns = t_ns;
-    const int64_t from =
-        std::max(t0, t_ns - std::max(SecondsToNs(options_.still_s), SecondsToNs(0.2)));
+    const int64_t from = std::max(imu_.begin_ns(), t_ns - std::max(still_ns, SecondsToNs(0.2)));
     Eigen::Vector3d f = Eigen::Vector3d::Zero();
     for (const ImuSample& s : imu_.samples()) {
       if (s.t_ns > t_ns) break;
@@ -136,8 +155,11 @@ void FrontEnd::Initialise(int64_t t_ns, FrontEndResult& result) {
     note << "; the given bias is used";
   }
   bias_t_ns_ = state_t_ns;
-  if (options_.learn_gyro_bias && !options_.bias) {
+  if (options_.learn_gyro_bias && !options_.bias &&
+      (!bias_from_still || options_.learn_gyro_bias_after_still)) {
     if (!bias_from_still) gyro_bias_sigma_ = options_.gyro_bias_filter.unknown_bias_sigma;
+    // The filter is fed the rotation the matches alone measure: a second solve of each fit.
+    options_.refit.measure_rotation = true;
     gyro_bias_filter_.emplace(bias_.gyro, gyro_bias_sigma_, imu_params_.gyro_random_walk,
                               state_t_ns, options_.gyro_bias_filter);
     note << "; the gyro bias is then learnt from the rotations the fitted motions measure";
