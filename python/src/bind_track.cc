@@ -96,8 +96,8 @@ void BindTrack(py::module_& m) {
   py::class_<FrontEnd>(m, "FrontEnd", R"(The front end one frame at a time, as `track` runs it over
 a dataset: feed the IMU samples in time order (add_imu, at least up to each frame's time), then
 the frame (process). It initialises gravity and the gyro bias from the first still_s seconds of
-IMU (and with learn_gyro_bias goes on learning the bias from the rotations its fits measure, also
-from zero when the log does not start still), predicts each frame's keypoints from the IMU and the
+IMU just before the first frame, else at the log's start (without a still window, and with
+learn_gyro_bias, it learns the bias from zero from the rotations its fits measure), predicts each frame's keypoints from the IMU and the
 previous frame, matches them (guided, or brute force as the fallback), fits the motion and keeps
 the estimated pose.)")
       .def(py::init([](const PinholeCamera& camera, const ImuParams& imu_params,
@@ -216,7 +216,8 @@ an empty image, or a time not after the previous frame's.)")
       py::arg("imu_model") = "euroc", py::arg("seed") = 42,
       R"(Runs the front end as `imumatch track` does: the dataset (a path, a Dataset or a
 SyntheticSequence) fed frame by frame with its IMU, no ground truth given to it; gravity and gyro
-bias from the first still_s seconds, the bias then learnt from the fits (learn_gyro_bias). Returns {"frames": [per frame: status ('first', 'guided' or
+bias from still_s seconds of still IMU (before the first frame, else at the log's start); without
+them the bias is learnt from the fits (learn_gyro_bias). Returns {"frames": [per frame: status ('first', 'guided' or
 'brute_force'), event, matches (final pass), matches_pass1, world_from_cam (Rigid3d, None
 while the IMU initialises), velocity, precision per threshold and relative pose error to the
 previous frame when the dataset has ground truth], "notes", "fallbacks", "rpe" (RMSE and mean,
