@@ -95,11 +95,11 @@ py::dict ResultDict(const FrontEndResult& r) {
 void BindTrack(py::module_& m) {
   py::class_<FrontEnd>(m, "FrontEnd", R"(The front end one frame at a time, as `track` runs it over
 a dataset: feed the IMU samples in time order (add_imu, at least up to each frame's time), then
-the frame (process). It initialises gravity and the gyro bias from the first still_s seconds of
-IMU just before the first frame, else at the log's start (without a still window, and with
-learn_gyro_bias, it learns the bias from zero from the rotations its fits measure), predicts each frame's keypoints from the IMU and the
-previous frame, matches them (guided, or brute force as the fallback), fits the motion and keeps
-the estimated pose.)")
+the frame (process). It initialises gravity and the gyro bias from still_s seconds of still IMU
+just before the first frame, else at the log's start (without a still window, and with
+learn_gyro_bias, it learns the bias from zero from the rotations its fits measure), predicts each
+frame's keypoints from the IMU and the previous frame, matches them (guided, or brute force as the
+fallback), fits the motion and keeps the estimated pose.)")
       .def(py::init([](const PinholeCamera& camera, const ImuParams& imu_params,
                        const Rigid3d& cam_from_imu, const std::string& detector, int max_keypoints,
                        bool hybrid, bool second_pass, double still_s, bool learn_gyro_bias) {
