@@ -9,18 +9,6 @@
 
 #include "imumatch/core/error.h"
 
-// The commands' own checks of what the user typed: throws imumatch::InvalidArgument(message) when
-// cond is false. Unlike IMUMATCH_CHECK the message stands alone (it names the option), without
-// the C++ condition after it.
-#define IMUMATCH_CLI_REQUIRE(cond, message)                          \
-  do {                                                               \
-    if (!(cond)) {                                                   \
-      std::ostringstream imumatch_cli_stream_;                       \
-      imumatch_cli_stream_ << message;                               \
-      throw ::imumatch::InvalidArgument(imumatch_cli_stream_.str()); \
-    }                                                                \
-  } while (false)
-
 namespace imumatch::apps {
 
 // Each subcommand adds itself to the app; the callback runs the command and may throw any

@@ -185,9 +185,9 @@ EvaluationOptions MakeOptions(const CommonArgs& a) {
   o.motion_source = ParseMotionSource(a.motion_source);
   o.seed = a.seed;
   o.keep_visuals = a.images;
-  IMUMATCH_CLI_REQUIRE(std::isfinite(a.threshold) && a.threshold >= 0.0,
-                       "--threshold must be a finite number of pixels > 0, got " << a.threshold);
-  IMUMATCH_CLI_REQUIRE(a.e2e_frames == 0 || a.e2e_frames >= 2, "--e2e-frames must be 0 or >= 2");
+  IMUMATCH_REQUIRE(std::isfinite(a.threshold) && a.threshold >= 0.0,
+                   "--threshold must be a finite number of pixels > 0, got " << a.threshold);
+  IMUMATCH_REQUIRE(a.e2e_frames == 0 || a.e2e_frames >= 2, "--e2e-frames must be 0 or >= 2");
   o.ratio = a.ratio;
   o.guided.ratio = a.guided_ratio > 0.0 ? a.guided_ratio : a.ratio;
   o.guided.mutual = a.mutual;
@@ -195,12 +195,12 @@ EvaluationOptions MakeOptions(const CommonArgs& a) {
   o.prediction.fixed_half_size = a.fixed_half;
   if (a.z_min >= 0.0) o.prediction.segment_min_depth = a.z_min;
   if (a.z_max >= 0.0) o.prediction.segment_max_depth = a.z_max;
-  IMUMATCH_CLI_REQUIRE(o.prediction.segment_max_depth > o.prediction.segment_min_depth,
-                       "--z-max (" << o.prediction.segment_max_depth << " m"
-                                   << (a.z_max < 0.0 ? ", the default" : "")
-                                   << ") must be farther than --z-min ("
-                                   << o.prediction.segment_min_depth << " m"
-                                   << (a.z_min < 0.0 ? ", the default" : "") << ")");
+  IMUMATCH_REQUIRE(o.prediction.segment_max_depth > o.prediction.segment_min_depth,
+                   "--z-max (" << o.prediction.segment_max_depth << " m"
+                               << (a.z_max < 0.0 ? ", the default" : "")
+                               << ") must be farther than --z-min ("
+                               << o.prediction.segment_min_depth << " m"
+                               << (a.z_min < 0.0 ? ", the default" : "") << ")");
   o.prediction.scene_near.enabled = !a.fixed_segments;
   o.refine_subpixel = !a.no_refine;
   o.second_pass = !a.single_pass;
@@ -339,9 +339,8 @@ void RunDemo(CommonArgs a, int intermediate, const std::string& motions, const s
   for (const std::string& g : SplitList(gains)) {
     char* end = nullptr;
     const double v = std::strtod(g.c_str(), &end);
-    IMUMATCH_CLI_REQUIRE(
-        end != g.c_str() && *end == '\0' && std::isfinite(v) && v > 0.0 && v <= 100.0,
-        "--gains: '" << g << "' is not a gain in (0, 100]");
+    IMUMATCH_REQUIRE(end != g.c_str() && *end == '\0' && std::isfinite(v) && v > 0.0 && v <= 100.0,
+                     "--gains: '" << g << "' is not a gain in (0, 100]");
     gain_values.push_back(v);
   }
   so.imu_model = a.imu_model;
@@ -415,8 +414,8 @@ void RunDemo(CommonArgs a, int intermediate, const std::string& motions, const s
 }  // namespace
 
 int ApplyThreads(int threads) {
-  IMUMATCH_CLI_REQUIRE(threads >= 0 && threads <= 1024,
-                       "--threads must be in [0, 1024], got " << threads);
+  IMUMATCH_REQUIRE(threads >= 0 && threads <= 1024,
+                   "--threads must be in [0, 1024], got " << threads);
   const int n =
       threads > 0 ? threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   cv::setNumThreads(n);

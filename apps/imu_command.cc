@@ -60,10 +60,10 @@ void PrintPair(const Dataset& d, size_t i, NavState& nav, const ImuBias& bias,
 }
 
 void RunImu(const ImuArgs& a) {
-  IMUMATCH_CLI_REQUIRE(a.still_s >= 0.0, "--still must be >= 0");
-  IMUMATCH_CLI_REQUIRE(a.max_frames != 1,
-                       "--frames must be 0 (all) or at least 2: one frame has "
-                       "no interval to integrate over");
+  IMUMATCH_REQUIRE(a.still_s >= 0.0, "--still must be >= 0");
+  IMUMATCH_REQUIRE(a.max_frames != 1,
+                   "--frames must be 0 (all) or at least 2: one frame has "
+                   "no interval to integrate over");
   DatasetOptions options;
   options.max_frames = a.max_frames;
   const Dataset d = LoadDataset(a.path, options);

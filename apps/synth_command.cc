@@ -45,7 +45,7 @@ struct SynthArgs {
 PinholeCamera SynthCamera(const SynthArgs& a) {
   if (a.camera == "kinect") {
     // Kinect-like camera scaled to the requested width (4:3).
-    IMUMATCH_CLI_REQUIRE(a.width >= 16 && a.width <= 4096, "--width must be in [16, 4096]");
+    IMUMATCH_REQUIRE(a.width >= 16 && a.width <= 4096, "--width must be in [16, 4096]");
     return PinholeCamera::KinectDefault().ScaledToWidth(a.width);
   }
   if (a.width_option != nullptr && a.width_option->count() > 0) {

@@ -56,9 +56,8 @@ void RunTrackCommand(const TrackArgs& a) {
   o.front_end.learn_gyro_bias = !a.fixed_gyro_bias;
   o.front_end.prediction.scene_near.enabled = !a.fixed_segments;
   o.front_end.still_s = a.still_s;
-  IMUMATCH_CLI_REQUIRE(
-      a.max_frames != 1,
-      "--max-frames must be 0 (all) or at least 2: one frame has no pair to track");
+  IMUMATCH_REQUIRE(a.max_frames != 1,
+                   "--max-frames must be 0 (all) or at least 2: one frame has no pair to track");
   o.first_frame = a.first;
   o.max_frames = a.max_frames;
   o.keep_visuals = a.images;
@@ -71,8 +70,8 @@ void RunTrackCommand(const TrackArgs& a) {
     if (item.empty()) continue;
     char* end = nullptr;
     const double v = std::strtod(item.c_str(), &end);
-    IMUMATCH_CLI_REQUIRE(end != item.c_str() && *end == '\0' && std::isfinite(v) && v > 0.0,
-                         "--thresholds: '" << item << "' is not a positive number of pixels");
+    IMUMATCH_REQUIRE(end != item.c_str() && *end == '\0' && std::isfinite(v) && v > 0.0,
+                     "--thresholds: '" << item << "' is not a positive number of pixels");
     o.thresholds_px.push_back(v);
   }
   o.Check();

@@ -51,14 +51,19 @@ class OutOfRange : public Error {
 
 }  // namespace imumatch
 
-// Throws imumatch::InvalidArgument("<message> (required: <cond>)") when cond is false: the
-// message first, as users read it (it names the value and says what is wrong), the condition
-// after it for the caller who wrote the call.
-#define IMUMATCH_CHECK(cond, message)                                  \
-  do {                                                                 \
-    if (!(cond)) {                                                     \
-      std::ostringstream imumatch_check_stream_;                       \
-      imumatch_check_stream_ << message << " (required: " #cond ")";   \
-      throw ::imumatch::InvalidArgument(imumatch_check_stream_.str()); \
-    }                                                                  \
+// Throws imumatch::InvalidArgument(<message>) when cond is false; message is streamed
+// (`"got " << x`). For checks whose message says all a user needs, as a command's checks of its
+// own options, which name the option.
+#define IMUMATCH_REQUIRE(cond, message)                                  \
+  do {                                                                   \
+    if (!(cond)) {                                                       \
+      std::ostringstream imumatch_require_stream_;                       \
+      imumatch_require_stream_ << message;                               \
+      throw ::imumatch::InvalidArgument(imumatch_require_stream_.str()); \
+    }                                                                    \
   } while (false)
+
+// The same with the condition after the message, "<message> (required: <cond>)": the message
+// first, as users read it (it names the value and says what is wrong), the condition for the
+// caller who wrote the call.
+#define IMUMATCH_CHECK(cond, message) IMUMATCH_REQUIRE(cond, message << " (required: " #cond ")")
