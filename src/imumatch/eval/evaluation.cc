@@ -360,16 +360,8 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
                                   run_options, matches, predictions);
         if (bias_filter && method == MatchMethod::kGuided) {
           // The rotation the fitted motion's matches measure updates the detector's bias.
-          const std::optional<ImuRotationMeasurement> measured =
-              ImuRotationFromFit(run.refit, dataset.cam_from_imu);
-          if (measured) {
-            try {
-              bias_filter->Update(dataset.imu.Slice(fa.t_ns, fb.t_ns), dataset.imu_params,
-                                  measured->imu_a_from_imu_b, measured->covariance);
-            } catch (const Error&) {
-              // An interval the filter cannot use (e.g. before its last update): skipped.
-            }
-          }
+          UpdateGyroBiasFromFit(run.refit, dataset.cam_from_imu, dataset.imu, dataset.imu_params,
+                                fa.t_ns, fb.t_ns, &*bias_filter);
         }
         run.residuals = judge.Judge(matches);
         if (run.refit.ok) {
@@ -417,12 +409,9 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
     if (!bias_filters[d]) continue;
     const GyroBiasFilter& f = *bias_filters[d];
     std::ostringstream note;
-    note << std::scientific << std::setprecision(2) << name << ": "
-         << ToString(options.detectors[d])
-         << ": gyro bias learnt from the guided pairs' fitted rotations: " << f.bias().x() << " "
-         << f.bias().y() << " " << f.bias().z() << " rad/s (+- "
-         << f.SigmaAt(dataset.frames[pairs.back().b].t_ns) << "), " << f.updates() << " updates, "
-         << f.rejected() << " rejected by the gate";
+    note << name << ": " << ToString(options.detectors[d])
+         << ": gyro bias learnt from the guided pairs' fitted rotations: "
+         << f.Summary(dataset.frames[pairs.back().b].t_ns);
     result.notes.push_back(note.str());
   }
   for (const std::string& w : dataset.warnings) result.warnings.push_back(name + ": " + w);

@@ -139,14 +139,11 @@ TrackRunResult RunTrack(const EvalSource& source, const TrackRunOptions& options
   }
   out.notes = fe.notes();
   if (const GyroBiasFilter* filter = fe.gyro_bias_filter(); filter != nullptr) {
-    out.learnt_gyro_bias = fe.gyro_bias();
-    std::ostringstream note;
-    note << std::scientific << std::setprecision(2)
-         << "gyro bias learnt from the fitted rotations: " << fe.gyro_bias().x() << " "
-         << fe.gyro_bias().y() << " " << fe.gyro_bias().z() << " rad/s (+- " << fe.gyro_bias_sigma()
-         << " at its last update), " << filter->updates() << " updates, " << filter->rejected()
-         << " rejected by the gate";
-    out.notes.push_back(note.str());
+    out.learnt_gyro_bias = filter->bias();
+    int64_t last_t_ns = 0;  // the filter's sigma at the last frame processed
+    for (const TrackFrameRecord& f : out.frames) last_t_ns = std::max(last_t_ns, f.result.t_ns);
+    out.notes.push_back("gyro bias learnt from the fitted rotations: " +
+                        filter->Summary(last_t_ns));
   }
   out.has_truth =
       std::any_of(truth.begin(), truth.end(), [](const auto& t) { return t.has_value(); });

@@ -100,44 +100,49 @@ void FrontEnd::Initialise(int64_t t_ns, FrontEndResult& result) {
   // from the frame's). Still means at rest here as at the log's start: an IMU cannot tell rest
   // from a constant velocity.
   const int64_t still_ns = SecondsToNs(options_.still_s);
-  int64_t t0 = imu_.begin_ns();
-  int64_t t1 = std::min(t_ns, t0 + still_ns);
-  std::optional<StillInitialization> before_frame;
-  if (still_ns > 0 && t_ns - still_ns > t0) {
+  const int64_t log_start = imu_.begin_ns();
+  std::optional<StillInitialization> still;  // the window's, when one was still
+  bool before_frame = false;
+  int64_t t1 = std::min(t_ns, log_start + still_ns);  // the still window's end
+  if (still_ns > 0 && t_ns - still_ns > log_start) {
     try {
-      before_frame = InitializeFromStill(imu_, t_ns - still_ns, t_ns, imu_params_);
-      t0 = t_ns - still_ns;
+      still = InitializeFromStill(imu_, t_ns - still_ns, t_ns, imu_params_);
+      before_frame = true;
       t1 = t_ns;
     } catch (const Error&) {
       // Not still before the frame: the log's start is tried.
     }
   }
-  Rigid3d world_from_imu;
-  bool bias_from_still = false;
+  std::string not_still;  // why the log's start is not a still window either
+  if (!still) {
+    try {
+      still = InitializeFromStill(imu_, log_start, t1, imu_params_);
+    } catch (const Error& e) {
+      not_still = e.what();
+    }
+  }
+  const bool bias_from_still = still.has_value();
   // Where the state starts: at rest at the end of the still window, propagated to the frame; or,
-  // when the log does not start still, at the frame itself with the velocity unknown.
-  int64_t state_t_ns = t1;
-  try {
-    const StillInitialization init =
-        before_frame ? *before_frame : InitializeFromStill(imu_, t0, t1, imu_params_);
-    bias_from_still = true;
-    world_from_imu = init.world_from_imu;
-    bias_ = init.bias;
-    gyro_bias_sigma_ = init.gyro_bias_sigma;
+  // when there is none, at the frame itself with the velocity unknown.
+  const int64_t state_t_ns = bias_from_still ? t1 : t_ns;
+  Rigid3d world_from_imu;
+  if (still) {
+    world_from_imu = still->world_from_imu;
+    bias_ = still->bias;
+    gyro_bias_sigma_ = still->gyro_bias_sigma;
     note << "gravity and gyro bias from the still "
          << (before_frame ? "IMU just before the first frame" : "start of the IMU") << " ("
-         << init.num_samples << " samples): bias " << bias_.gyro.x() << " " << bias_.gyro.y() << " "
-         << bias_.gyro.z() << " rad/s";
-    if (init.end_ns < t1) note << " (the still period ends at an IMU gap)";
-  } catch (const Error& e) {
+         << still->num_samples << " samples): bias " << bias_.gyro.x() << " " << bias_.gyro.y()
+         << " " << bias_.gyro.z() << " rad/s";
+    if (still->end_ns < t1) note << " (the still period ends at an IMU gap)";
+  } else {
     // Not still (or too short): the state starts at the frame, gravity from the mean specific
     // force of the IMU just before it (still_s, at least 0.2 s), no bias estimate, the velocity
     // unknown. "At rest" at the log's start, propagated to a frame that may come many seconds
     // later (MH_05's first frame comes 20 s into its log), would be a guess that every second of
     // integration makes worse. The recorded samples are averaged directly: a gap in the log does
     // not matter to a mean.
-    state_t_ns = t_ns;
-    const int64_t from = std::max(imu_.begin_ns(), t_ns - std::max(still_ns, SecondsToNs(0.2)));
+    const int64_t from = std::max(log_start, t_ns - std::max(still_ns, SecondsToNs(0.2)));
     Eigen::Vector3d f = Eigen::Vector3d::Zero();
     for (const ImuSample& s : imu_.samples()) {
       if (s.t_ns > t_ns) break;
@@ -146,7 +151,7 @@ void FrontEnd::Initialise(int64_t t_ns, FrontEndResult& result) {
     world_from_imu = Rigid3d(AttitudeFromGravity(f), Eigen::Vector3d::Zero());
     bias_ = ImuBias();
     gyro_bias_sigma_ = options_.motion.gyro_bias_sigma;
-    note << "the IMU's start is not still (" << e.what()
+    note << "the IMU's start is not still (" << not_still
          << "): gravity from its mean before the frame, gyro bias assumed zero";
   }
   if (options_.bias) {
@@ -258,14 +263,8 @@ std::vector<Match> FrontEnd::MatchPass(const CameraMotion& motion, const Feature
 
 void FrontEnd::LearnGyroBias(const MotionRefit& refit, int64_t t_a_ns, int64_t t_b_ns) {
   if (!gyro_bias_filter_) return;
-  const std::optional<ImuRotationMeasurement> measured = ImuRotationFromFit(refit, cam_from_imu_);
-  if (!measured) return;
-  try {
-    gyro_bias_filter_->Update(imu_.Slice(t_a_ns, t_b_ns), imu_params_, measured->imu_a_from_imu_b,
-                              measured->covariance);
-  } catch (const Error&) {
-    return;  // an interval the filter cannot use (across an IMU gap, before its last update)
-  }
+  UpdateGyroBiasFromFit(refit, cam_from_imu_, imu_, imu_params_, t_a_ns, t_b_ns,
+                        &*gyro_bias_filter_);
   bias_.gyro = gyro_bias_filter_->bias();
   gyro_bias_sigma_ = gyro_bias_filter_->SigmaAt(t_b_ns);
   bias_t_ns_ = t_b_ns;

@@ -153,7 +153,6 @@ class FrontEnd {
   // The gyro bias in use (rad/s, IMU frame), and its filter when the bias is learnt (nullptr before
   // initialisation or when learn_gyro_bias is off): updates(), rejected(), SigmaAt().
   const Eigen::Vector3d& gyro_bias() const { return bias_.gyro; }
-  double gyro_bias_sigma() const { return gyro_bias_sigma_; }  // 1-sigma when last set
   const GyroBiasFilter* gyro_bias_filter() const {
     return gyro_bias_filter_ ? &*gyro_bias_filter_ : nullptr;
   }

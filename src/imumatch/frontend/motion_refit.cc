@@ -509,6 +509,20 @@ std::optional<ImuRotationMeasurement> ImuRotationFromFit(const MotionRefit& refi
   return out;
 }
 
+bool UpdateGyroBiasFromFit(const MotionRefit& refit, const Rigid3d& cam_from_imu,
+                           const ImuBuffer& imu, const ImuParams& params, int64_t t_a_ns,
+                           int64_t t_b_ns, GyroBiasFilter* filter) {
+  IMUMATCH_CHECK(filter != nullptr, "UpdateGyroBiasFromFit needs a filter");
+  const std::optional<ImuRotationMeasurement> measured = ImuRotationFromFit(refit, cam_from_imu);
+  if (!measured) return false;
+  try {
+    return filter->Update(imu.Slice(t_a_ns, t_b_ns), params, measured->imu_a_from_imu_b,
+                          measured->covariance);
+  } catch (const Error&) {
+    return false;
+  }
+}
+
 KeypointPredictor SecondPassPredictor(const PixelUndistorter& undistorter, const MotionRefit& refit,
                                       const PredictionOptions& prediction,
                                       const SceneNearDepth& first_pass_scene) {

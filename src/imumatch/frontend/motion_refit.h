@@ -10,6 +10,9 @@
 
 #include "imumatch/camera/pixel_undistorter.h"
 #include "imumatch/imu/camera_motion.h"
+#include "imumatch/imu/gyro_bias_filter.h"
+#include "imumatch/imu/imu_buffer.h"
+#include "imumatch/imu/imu_params.h"
 #include "imumatch/matching/depth_edges.h"
 #include "imumatch/matching/match_types.h"
 #include "imumatch/matching/predictor.h"
@@ -103,6 +106,14 @@ struct ImuRotationMeasurement {
 };
 std::optional<ImuRotationMeasurement> ImuRotationFromFit(const MotionRefit& refit,
                                                          const Rigid3d& cam_from_imu);
+
+// Feeds the rotation refit measured between t_a_ns and t_b_ns (ImuRotationFromFit) to filter,
+// with the IMU samples of that interval. Returns false when there was nothing to feed (no
+// measured rotation) or the interval is one the filter cannot use (across an IMU gap, before its
+// last update); otherwise GyroBiasFilter::Update's own result (false when its gate refused it).
+bool UpdateGyroBiasFromFit(const MotionRefit& refit, const Rigid3d& cam_from_imu,
+                           const ImuBuffer& imu, const ImuParams& params, int64_t t_a_ns,
+                           int64_t t_b_ns, GyroBiasFilter* filter);
 
 // Where a correspondence ends in B (image pixels): the refined position or the track's, else the
 // matched keypoint.

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
+#include <sstream>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -110,6 +112,14 @@ bool GyroBiasFilter::Update(const std::vector<ImuSample>& samples, const ImuPara
   t_ns_ = samples.front().t_ns;
   ++updates_;
   return true;
+}
+
+std::string GyroBiasFilter::Summary(int64_t t_ns) const {
+  std::ostringstream out;
+  out << std::scientific << std::setprecision(2) << bias_.x() << " " << bias_.y() << " "
+      << bias_.z() << " rad/s (+- " << SigmaAt(t_ns) << "), " << updates_ << " updates, "
+      << rejected_ << " rejected by the gate";
+  return out.str();
 }
 
 }  // namespace imumatch

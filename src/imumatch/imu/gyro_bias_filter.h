@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -61,6 +62,10 @@ class GyroBiasFilter {
   bool Update(const std::vector<ImuSample>& samples, const ImuParams& params,
               const Eigen::Quaterniond& measured_imu_a_from_imu_b,
               const Eigen::Matrix3d& measured_covariance);
+
+  // "b_x b_y b_z rad/s (+- sigma), N updates, M rejected by the gate" with the sigma at t_ns
+  // (SigmaAt), for reports.
+  std::string Summary(int64_t t_ns) const;
 
   int updates() const { return updates_; }
   int rejected() const { return rejected_; }
