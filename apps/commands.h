@@ -26,6 +26,11 @@ inline constexpr const char* kCameraOptionHelp =
     "extrinsics are not used) or a text line as camera.txt ('[radtan|equidistant] fx fy cx cy "
     "width height k...'); the images must have its size";
 
+inline constexpr const char* kTimeshiftOptionHelp =
+    "EuRoC/ASL: the camera's clock offset from the IMU's (s, t_imu = t_cam + shift), replacing "
+    "the calibration's timeshift_cam_imu; eval and track measure what is left of it from the "
+    "fitted rotations and say when it is worth setting";
+
 // --threads N (0 = all cores): OpenCV's worker threads (feature extraction, image decoding) via
 // cv::setNumThreads; returns the count used. eval_command.cc.
 int ApplyThreads(int threads);

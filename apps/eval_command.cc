@@ -262,8 +262,9 @@ void PrepareOut(const CommonArgs& a) {
   if (!check.note.empty()) std::cerr << "imumatch: note: " << check.note << "\n";
 }
 
-void RunEval(const std::string& path, const std::string& camera_file, CommonArgs a,
-             double interval_s, int step, size_t max_pairs) {
+void RunEval(const std::string& path, const std::string& camera_file,
+             std::optional<double> timeshift_s, CommonArgs a, double interval_s, int step,
+             size_t max_pairs) {
   EvaluationOptions o = MakeOptions(a);
   PrepareOut(a);
   const std::optional<double> threshold =
@@ -274,6 +275,7 @@ void RunEval(const std::string& path, const std::string& camera_file, CommonArgs
   dopts.imu_model = a.imu_model;
   dopts.imu_seed = a.seed;
   if (!camera_file.empty()) dopts.camera = ReadCameraFile(camera_file);
+  dopts.timeshift_cam_imu_s = timeshift_s;
   source = MakeDiskSource(LoadDatasetOrPosePair(path, dopts));
 
   if (o.motion_source == MotionSource::kImu && source.dataset.imu.empty()) {
@@ -450,6 +452,7 @@ void AddEvalCommand(CLI::App& app) {
   struct Args {
     std::string path;
     std::string camera;
+    std::optional<double> timeshift;
     CommonArgs common;
     double interval = 0.0;
     int step = 1;
@@ -471,9 +474,12 @@ void AddEvalCommand(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--camera", args->camera, kCameraOptionHelp);
+  cmd->add_option("--timeshift-cam-imu", args->timeshift, kTimeshiftOptionHelp)
+      ->check(NumberIn(-1.0, false, 1.0, false));
   AddCommonOptions(cmd, args->common);
   cmd->callback([args] {
-    RunEval(args->path, args->camera, args->common, args->interval, args->step, args->max_pairs);
+    RunEval(args->path, args->camera, args->timeshift, args->common, args->interval, args->step,
+            args->max_pairs);
   });
 }
 

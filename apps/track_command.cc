@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -43,6 +44,7 @@ struct TrackArgs {
   std::string imu_model = "euroc";
   uint64_t seed = 42;
   std::string camera;
+  std::optional<double> timeshift;
 };
 
 void RunTrackCommand(const TrackArgs& a) {
@@ -83,6 +85,7 @@ void RunTrackCommand(const TrackArgs& a) {
   // A missing image is a bad frame: skipped with its name when it is read, the run goes on.
   dopts.check_files_exist = false;
   if (!a.camera.empty()) dopts.camera = ReadCameraFile(a.camera);
+  dopts.timeshift_cam_imu_s = a.timeshift;
   const EvalSource source = MakeDiskSource(LoadDataset(a.path, dopts));
   std::cerr << "imumatch track: " << source.dataset.name << " (" << source.dataset.frames.size()
             << " frames); IMU: " << source.dataset.imu_source_note << "\n";
@@ -118,6 +121,7 @@ void RunTrackCommand(const TrackArgs& a) {
        {"ground truth",
         result.has_truth ? "judged afterwards, never given to the front end" : "none"}});
   std::cout << report << std::flush;
+  for (const std::string& w : result.warnings) std::cerr << "imumatch: warning: " << w << "\n";
   const auto files = WriteTrackOutputs(a.out, result, o, report);
   RecordOutputs(a.out, files);
   std::cout << "\nWrote " << files.size() << " files to " << a.out
@@ -163,6 +167,8 @@ void AddTrackCommand(CLI::App& app) {
       ->check(NumberIn(0.0, false, 3600.0, false));
   cmd->add_option("--first", a->first, "first frame")->capture_default_str();
   cmd->add_option("--camera", a->camera, kCameraOptionHelp);
+  cmd->add_option("--timeshift-cam-imu", a->timeshift, kTimeshiftOptionHelp)
+      ->check(NumberIn(-1.0, false, 1.0, false));
   cmd->add_option("--max-frames", a->max_frames, "frames to run (0 = all)")->capture_default_str();
   cmd->add_option("--images", a->images, "match images of the first N judged frames")
       ->capture_default_str()

@@ -193,6 +193,20 @@ an empty image, or a time not after the previous frame's.)")
           frames.append(FrameDict(f, o.thresholds_px));
         out["frames"] = frames;
         out["notes"] = result.notes;
+        out["warnings"] = result.warnings;
+        if (result.time_offset) {
+          const TimeOffsetEstimate& t = *result.time_offset;
+          py::dict offset;
+          offset["measured"] = t.measured;
+          offset["offset_s"] = t.offset_s;
+          offset["sigma_s"] = t.sigma_s;
+          offset["observations"] = t.observations;
+          offset["inliers"] = t.inliers;
+          offset["reason"] = t.reason;
+          out["time_offset"] = offset;
+        } else {
+          out["time_offset"] = py::none();
+        }
         out["fallbacks"] = result.FallbackCount();
         out["has_truth"] = result.has_truth;
         if (result.has_truth && result.rpe.pairs() > 0) {
@@ -220,8 +234,10 @@ bias from still_s seconds of still IMU (before the first frame, else at the log'
 them the bias is learnt from the fits (learn_gyro_bias). Returns {"frames": [per frame: status ('first', 'guided' or
 'brute_force'), event, matches (final pass), matches_pass1, world_from_cam (Rigid3d, None
 while the IMU initialises), velocity, precision per threshold and relative pose error to the
-previous frame when the dataset has ground truth], "notes", "fallbacks", "rpe" (RMSE and mean,
-None without ground truth), "wall_s"}. Raises InputError for a dataset without an IMU.)");
+previous frame when the dataset has ground truth], "notes", "warnings", "time_offset" (the
+camera's clock offset from the IMU's measured from the fitted rotations, t_imu = t_cam + offset:
+measured, offset_s, sigma_s, observations, inliers, reason; None with a simulated IMU),
+"fallbacks", "rpe" (RMSE and mean, None without ground truth), "wall_s"}. Raises InputError for a dataset without an IMU.)");
 }
 
 }  // namespace imumatch::python

@@ -180,6 +180,17 @@ def test_a_synthetic_sequence_written_in_both_layouts_loads_back(tmp_path):
                                              "sensor.yaml")).width == 752
 
 
+def test_track_measures_the_cameras_clock_offset_on_the_real_flight():
+    # MH_05's camera is triggered by the IMU's clock: the fitted rotations of 60 frames find no
+    # offset worth setting, and say how well they know it.
+    out = imumatch.track(os.path.join(data_dir(), "euroc_mh05_flight"), max_frames=60)
+    t = out["time_offset"]
+    assert t["measured"], t["reason"]
+    assert t["observations"] >= 30 and 0 < t["sigma_s"] < 0.001
+    assert abs(t["offset_s"]) < max(3 * t["sigma_s"], 0.0015)
+    assert not any("clocks look" in w for w in out["warnings"])
+
+
 def test_the_front_end_tracks_a_synthetic_walk_without_ground_truth():
     # Frames after the walk's 0.5 s still start; the IMU log starts at t = 0, so the front end
     # takes gravity and bias from the still part. The ground truth only judges afterwards.

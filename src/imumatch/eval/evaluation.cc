@@ -19,6 +19,7 @@
 #include "imumatch/core/so3.h"
 #include "imumatch/core/statistics.h"
 #include "imumatch/core/time.h"
+#include "imumatch/imu/time_offset.h"
 #include "imumatch/io/image_io.h"
 #include "imumatch/matching/baseline_matchers.h"
 #include "imumatch/matching/descriptor_distance.h"
@@ -161,6 +162,7 @@ void EvaluationResult::Append(EvaluationResult other) {
   for (auto& v : other.visuals) visuals.push_back(std::move(v));
   for (auto& n : other.notes) notes.push_back(std::move(n));
   for (auto& w : other.warnings) warnings.push_back(std::move(w));
+  for (auto& t : other.time_offsets) time_offsets.push_back(std::move(t));
   pairs_total += other.pairs_total;
   wall_s += other.wall_s;
 }
@@ -213,8 +215,11 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
                           !dataset.imu_simulated && options.gyro_bias_from_matches;
   std::vector<std::optional<GyroBiasFilter>> bias_filters(options.detectors.size());
   // The fit's rotation measurement is a second solve: only when a filter reads it.
+  // The fitted rotations also measure the offset between the camera's and the IMU's clocks.
+  const bool measure_offset = !dataset.imu.empty() && !dataset.imu_simulated;
+  std::vector<std::vector<RotationObservation>> fitted_rotations(options.detectors.size());
   EvaluationOptions run_options = options;
-  run_options.refit.measure_rotation = learn_bias;
+  run_options.refit.measure_rotation = learn_bias || measure_offset;
   const PixelUndistorter undistorter(dataset.camera);
   const cv::Mat field_mask = FieldOfViewMask(dataset.camera);  // empty but for a wide fisheye
   const auto wall0 = Clock::now();
@@ -363,6 +368,13 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
           UpdateGyroBiasFromFit(run.refit, dataset.cam_from_imu, dataset.imu, dataset.imu_params,
                                 fa.t_ns, fb.t_ns, &*bias_filter);
         }
+        if (measure_offset && method == MatchMethod::kGuided) {
+          if (const std::optional<ImuRotationMeasurement> measured =
+                  ImuRotationFromFit(run.refit, dataset.cam_from_imu)) {
+            fitted_rotations[detector].push_back(
+                {fa.t_ns, fb.t_ns, measured->imu_a_from_imu_b, measured->covariance});
+          }
+        }
         run.residuals = judge.Judge(matches);
         if (run.refit.ok) {
           const Rigid3d& fitted = run.refit.motion.cam_b_from_cam_a;
@@ -413,6 +425,24 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
          << ": gyro bias learnt from the guided pairs' fitted rotations: "
          << f.Summary(dataset.frames[pairs.back().b].t_ns);
     result.notes.push_back(note.str());
+  }
+  if (measure_offset) {
+    for (size_t d = 0; d < fitted_rotations.size(); ++d) {
+      if (fitted_rotations[d].empty()) continue;
+      const Eigen::Vector3d gyro_bias = bias_filters[d]         ? bias_filters[d]->bias()
+                                        : bias.from_still_start ? bias.bias.gyro
+                                                                : Eigen::Vector3d::Zero();
+      const TimeOffsetEstimate offset =
+          EstimateTimeOffset(dataset.imu, dataset.imu_params, gyro_bias, fitted_rotations[d]);
+      result.time_offsets.push_back({name, options.detectors[d], offset});
+      const std::string detector = ToString(options.detectors[d]);
+      result.notes.push_back(name + ": " + detector +
+                             ": camera-IMU time offset measured from the guided pairs' fitted "
+                             "rotations (t_imu = t_cam + offset): " +
+                             offset.Summary());
+      const std::string advice = TimeOffsetAdvice(offset, dataset.timeshift_cam_imu_s);
+      if (!advice.empty()) result.warnings.push_back(name + ": " + detector + ": " + advice);
+    }
   }
   for (const std::string& w : dataset.warnings) result.warnings.push_back(name + ": " + w);
   for (std::string& w : CheckInputsLookRight(

@@ -12,6 +12,7 @@
 #include "imumatch/eval/ground_truth.h"
 #include "imumatch/eval/pair_selection.h"
 #include "imumatch/features/feature_factory.h"
+#include "imumatch/imu/time_offset.h"
 #include "imumatch/matching/descriptor_distance.h"
 #include "imumatch/matching/match_types.h"
 #include "imumatch/matching/predictor.h"
@@ -145,6 +146,15 @@ struct EvaluationResult {
   // the images or the IMU by far more than their noise, frames dropped by the loader): the
   // figures may be meaningless. Printed by the CLI and recorded in the report.
   std::vector<std::string> warnings;
+  // Recorded IMU: per case and detector, the camera's clock offset from the IMU's measured from
+  // the guided pairs' fitted rotations (EstimateTimeOffset; also in notes, and in warnings with
+  // TimeOffsetAdvice when worth setting).
+  struct TimeOffset {
+    std::string case_name;
+    DetectorKind detector = DetectorKind::kOrb;
+    TimeOffsetEstimate estimate;
+  };
+  std::vector<TimeOffset> time_offsets;
   size_t pairs_total = 0;  // pairs selected
   double wall_s = 0.0;
   void Append(EvaluationResult other);

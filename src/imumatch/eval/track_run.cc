@@ -145,6 +145,17 @@ TrackRunResult RunTrack(const EvalSource& source, const TrackRunOptions& options
     out.notes.push_back("gyro bias learnt from the fitted rotations: " +
                         filter->Summary(last_t_ns));
   }
+  if (!d.imu_simulated && !fe.fitted_rotations().empty()) {
+    // The fitted rotations measure the camera's clock offset from the IMU's.
+    const TimeOffsetEstimate offset =
+        EstimateTimeOffset(d.imu, d.imu_params, fe.gyro_bias(), fe.fitted_rotations());
+    out.time_offset = offset;
+    out.notes.push_back(
+        "camera-IMU time offset measured from the fitted rotations (t_imu = t_cam + offset): " +
+        offset.Summary());
+    const std::string advice = TimeOffsetAdvice(offset, d.timeshift_cam_imu_s);
+    if (!advice.empty()) out.warnings.push_back(advice);
+  }
   out.has_truth =
       std::any_of(truth.begin(), truth.end(), [](const auto& t) { return t.has_value(); });
   if (out.has_truth) out.rpe = ComputeRelativePoseError(estimated, truth);
@@ -199,6 +210,7 @@ std::string TrackReportMarkdown(const TrackRunResult& result, const TrackRunOpti
       << "; fell back to brute force: " << result.FallbackCount()
       << "; pose from depth (PnP): " << with_depth << "; second pass: " << second << "\n";
   out << "- wall time " << Fixed(result.wall_s, 1) << " s\n";
+  for (const std::string& w : result.warnings) out << "- **warning**: " << w << "\n";
   for (const std::string& note : result.notes) out << "- note: " << note << "\n";
   out << "\n## Per frame (mean over matched frames)\n\n"
       << "| matches pass 1 | matches final | extract ms | IMU + pass 1 ms | pose ms | pass 2 ms | "

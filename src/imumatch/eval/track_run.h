@@ -48,6 +48,10 @@ struct TrackRunResult {
   bool has_truth = false;
   // The gyro bias (rad/s, IMU frame) the front end learnt from its fits, when it learnt one.
   std::optional<Eigen::Vector3d> learnt_gyro_bias;
+  // The camera's clock offset from the IMU's, measured from the front end's fitted rotations
+  // (a recorded IMU with fits), and the advice to set it when it is worth it (warnings).
+  std::optional<TimeOffsetEstimate> time_offset;
+  std::vector<std::string> warnings;
   RelativePoseError rpe;
   std::vector<PairVisual> visuals;
   double wall_s = 0.0;

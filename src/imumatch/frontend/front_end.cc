@@ -66,6 +66,8 @@ FrontEnd::FrontEnd(const PinholeCamera& camera, const ImuParams& imu_params,
   imu_params.Check();
   options.Check();
   velocity_sigma_ = options.unknown_velocity_sigma;
+  // The fits' rotations are a second solve: only when something reads them.
+  if (options_.keep_fitted_rotations) options_.refit.measure_rotation = true;
 }
 
 void FrontEnd::AddImu(const ImuSample& sample) { imu_.Push(sample, "front end IMU stream"); }
@@ -261,7 +263,14 @@ std::vector<Match> FrontEnd::MatchPass(const CameraMotion& motion, const Feature
   return out;
 }
 
-void FrontEnd::LearnGyroBias(const MotionRefit& refit, int64_t t_a_ns, int64_t t_b_ns) {
+void FrontEnd::UseFittedRotation(const MotionRefit& refit, int64_t t_a_ns, int64_t t_b_ns) {
+  if (options_.keep_fitted_rotations) {
+    if (const std::optional<ImuRotationMeasurement> measured =
+            ImuRotationFromFit(refit, cam_from_imu_)) {
+      fitted_rotations_.push_back(
+          {t_a_ns, t_b_ns, measured->imu_a_from_imu_b, measured->covariance});
+    }
+  }
   if (!gyro_bias_filter_) return;
   UpdateGyroBiasFromFit(refit, cam_from_imu_, imu_, imu_params_, t_a_ns, t_b_ns,
                         &*gyro_bias_filter_);
@@ -447,7 +456,7 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
     if (refit.ok) {
       refined = refit.motion;
       fitted = refit.motion.cam_b_from_cam_a;
-      LearnGyroBias(refit, prev.t_ns, frame.t_ns);
+      UseFittedRotation(refit, prev.t_ns, frame.t_ns);
     }
     std::vector<KeypointPrediction> predictions2;
     int tracks2 = 0;

@@ -17,6 +17,7 @@
 #include "imumatch/imu/gyro_bias_filter.h"
 #include "imumatch/imu/imu_buffer.h"
 #include "imumatch/imu/imu_params.h"
+#include "imumatch/imu/time_offset.h"
 #include "imumatch/matching/guided_matcher.h"
 #include "imumatch/matching/klt_tracker.h"
 #include "imumatch/matching/neighbour_depth.h"
@@ -77,6 +78,9 @@ struct FrontEndOptions {
   bool learn_gyro_bias = true;
   bool learn_gyro_bias_after_still = false;
   GyroBiasFilterOptions gyro_bias_filter;
+  // Keep the rotations the second pass's fits measure (fitted_rotations()), for
+  // EstimateTimeOffset: the camera's clock offset from the IMU's, measured over a run.
+  bool keep_fitted_rotations = true;
   // Velocity uncertainty (m/s per axis) when nothing constrains it: after a loss or an IMU gap.
   double unknown_velocity_sigma = 1.0;
   double min_velocity_sigma = 0.02;
@@ -156,6 +160,8 @@ class FrontEnd {
   const GyroBiasFilter* gyro_bias_filter() const {
     return gyro_bias_filter_ ? &*gyro_bias_filter_ : nullptr;
   }
+  // The rotations the second pass's fits measured (keep_fitted_rotations), in frame order.
+  const std::vector<RotationObservation>& fitted_rotations() const { return fitted_rotations_; }
 
  private:
   struct Previous {
@@ -170,7 +176,7 @@ class FrontEnd {
   void Initialise(int64_t t_ns, FrontEndResult& result);
   // Feeds the rotation the refit measured between t_a and t_b to the gyro bias filter (when the
   // bias is learnt) and takes its bias for the next frames.
-  void LearnGyroBias(const MotionRefit& refit, int64_t t_a_ns, int64_t t_b_ns);
+  void UseFittedRotation(const MotionRefit& refit, int64_t t_a_ns, int64_t t_b_ns);
   // patch_look: add MatchByPatch's matches (options_.patch_second_look permitting). first_pass:
   // the first pass's matches, whose depths narrow the segments (options_.neighbour_depth), or null.
   // scene: set to the segments' near end the pass finds (PredictKeypointsInScene); a second pass
@@ -203,6 +209,7 @@ class FrontEnd {
   double gyro_bias_sigma_ = 0.0;
   int64_t bias_t_ns_ = 0;
   std::optional<GyroBiasFilter> gyro_bias_filter_;
+  std::vector<RotationObservation> fitted_rotations_;
 };
 
 }  // namespace imumatch

@@ -223,6 +223,10 @@ void DatasetOptions::Check() const {
                                    << kMaxSimulatedImuSpanNs << ")");
   spline.Check();
   imu_buffer.Check();
+  IMUMATCH_CHECK(!timeshift_cam_imu_s ||
+                     (std::isfinite(*timeshift_cam_imu_s) && std::abs(*timeshift_cam_imu_s) <= 1.0),
+                 "timeshift_cam_imu_s must be finite and at most 1 s, got "
+                     << timeshift_cam_imu_s.value_or(0.0));
 }
 
 PinholeCamera ReadCameraFile(const std::string& path) {
@@ -359,10 +363,20 @@ Dataset LoadEurocDataset(const std::string& path, const DatasetOptions& options)
   }
   // Kalibr's timeshift: t_imu = t_cam + shift. The frames move into the IMU's clock (the ground
   // truth's, for EuRoC and TUM-VI); depth0 rows pair with cam0 rows by their recorded times.
-  const int64_t shift_ns = std::llround(seq.cam0.timeshift_cam_imu_s * 1e9);
-  if (shift_ns != 0) {
-    d.warnings.push_back("frame timestamps moved by the camchain's timeshift_cam_imu (" +
+  // A timeshift given in the options replaces the calibration's.
+  const double shift_s = options.timeshift_cam_imu_s.value_or(seq.cam0.timeshift_cam_imu_s);
+  const int64_t shift_ns = std::llround(shift_s * 1e9);
+  d.timeshift_cam_imu_s = shift_s;
+  if (options.timeshift_cam_imu_s) {
+    std::ostringstream given;  // as typed: 0.0098, not 0.0097999999999999997
+    given << std::setprecision(9) << shift_s;
+    d.warnings.push_back("frame timestamps moved by the given timeshift_cam_imu (" + given.str() +
+                         " s, replacing the calibration's " +
                          FormatDoubleExact(seq.cam0.timeshift_cam_imu_s) +
+                         " s) into the IMU's clock (t_imu = t_cam + shift)");
+  } else if (shift_ns != 0) {
+    d.warnings.push_back("frame timestamps moved by the camchain's timeshift_cam_imu (" +
+                         FormatDoubleExact(shift_s) +
                          " s) into the IMU's clock (t_imu = t_cam + shift)");
   }
   if (seq.groundtruth.empty() && !seq.groundtruth_source.empty()) {
@@ -609,7 +623,14 @@ Dataset LoadDatasetOfKind(const std::string& path, const DatasetOptions& options
   if (!fs::exists(path, ec)) throw InputError(path, "dataset folder not found");
   if (!fs::is_directory(path, ec)) throw InputError(path, "dataset path is not a folder");
   const fs::path p(path);
-  if (fs::exists(p / "sequence.json", ec)) return LoadSyntheticDataset(path, options);
+  const bool synthetic = fs::exists(p / "sequence.json", ec);
+  if ((synthetic || fs::exists(p / "rgb.txt", ec)) && options.timeshift_cam_imu_s) {
+    throw InvalidArgument(path + ": a timeshift_cam_imu applies to EuRoC/ASL recordings; this is " +
+                          (synthetic ? "a synthetic folder, whose IMU shares the camera's clock"
+                                     : "a TUM RGB-D folder, whose IMU is simulated in the ground "
+                                       "truth's clock"));
+  }
+  if (synthetic) return LoadSyntheticDataset(path, options);
   if (fs::exists(p / "rgb.txt", ec)) return LoadTumRgbdDataset(path, options);
   if (!FindEurocMav0(path).empty()) return LoadEurocDataset(path, options);
   throw InputError(path,

@@ -46,6 +46,7 @@ struct Dataset {
   std::string imu_source_note;  // one human-readable line: where the IMU data comes from
   ImuParams imu_params;         // noise model of the IMU (recorded: sensor.yaml; simulated: model)
   Rigid3d cam_from_imu;         // p_in_cam = cam_from_imu * p_in_imu
+  double timeshift_cam_imu_s = 0.0;  // moved the frames into the IMU's clock (EuRoC)
   std::vector<StampedPose> groundtruth_world_from_cam;  // full-rate ground truth (may be empty)
   // 16-bit gray camera images: scaled to 8 bits in the EuRoC layout (TUM-VI's are 16-bit),
   // refused elsewhere (there a depth PNG listed as an image is the likelier cause).
@@ -83,6 +84,11 @@ struct DatasetOptions {
   int64_t max_simulated_imu_span_ns = kMaxSimulatedImuSpanNs;
 
   ImuBufferOptions imu_buffer;
+  // EuRoC/ASL: the offset between the camera's and the IMU's clocks (t_imu = t_cam + shift, s,
+  // |shift| <= 1), replacing the calibration's timeshift_cam_imu (Kalibr's camchain; 0 when it
+  // has none). eval and track measure the residual offset from the fitted rotations
+  // (EstimateTimeOffset) and say when it is worth setting. Other layouts refuse it.
+  std::optional<double> timeshift_cam_imu_s;
   // Keep frames [first_frame, first_frame + max_frames) after association (0 = all).
   size_t first_frame = 0;
   size_t max_frames = 0;

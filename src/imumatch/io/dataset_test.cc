@@ -471,6 +471,49 @@ TEST(Dataset, UnknownFolderAndBadOptions) {
   DatasetOptions options;
   options.imu_model = "phone9000";
   EXPECT_THROW(LoadDataset(DataPath("euroc_v101_excerpt"), options), InvalidArgument);
+  options = DatasetOptions();
+  options.timeshift_cam_imu_s = 1.5;  // no calibration: over a second
+  EXPECT_THROW(LoadDataset(DataPath("euroc_v101_excerpt"), options), InvalidArgument);
+  options.timeshift_cam_imu_s = std::nan("");
+  EXPECT_THROW(LoadDataset(DataPath("euroc_v101_excerpt"), options), InvalidArgument);
+}
+
+// A timeshift given in the options (eval / track --timeshift-cam-imu) replaces the calibration's
+// (MH_05 has none: 0): every frame moves by it into the IMU's clock, its ground truth read there,
+// and the loader says so. A TUM RGB-D folder (IMU simulated in the ground truth's clock) and a
+// synthetic one (one clock) refuse it.
+TEST(Dataset, AGivenTimeshiftMovesTheFramesIntoTheImusClock) {
+  const Dataset recorded = LoadDataset(DataPath("euroc_mh05_flight"));
+  EXPECT_EQ(recorded.timeshift_cam_imu_s, 0.0);
+  DatasetOptions options;
+  options.timeshift_cam_imu_s = -0.004;
+  const Dataset shifted = LoadDataset(DataPath("euroc_mh05_flight"), options);
+  EXPECT_EQ(shifted.timeshift_cam_imu_s, -0.004);
+  ASSERT_EQ(shifted.frames.size(), recorded.frames.size());
+  for (size_t i = 0; i < shifted.frames.size(); i += 50) {
+    EXPECT_EQ(shifted.frames[i].t_ns, recorded.frames[i].t_ns - 4'000'000) << i;
+    // The ground truth at the moved stamp: 4 ms of flight earlier (up to a few mm).
+    ASSERT_TRUE(shifted.frames[i].world_from_cam && recorded.frames[i].world_from_cam);
+    const double moved = (shifted.frames[i].world_from_cam->translation -
+                          recorded.frames[i].world_from_cam->translation)
+                             .norm();
+    EXPECT_LT(moved, 0.01) << i;
+  }
+  bool said = false;
+  for (const std::string& w : shifted.warnings) {
+    said |= w.find("given timeshift_cam_imu (-0.004 s, replacing the calibration's 0 s)") !=
+            std::string::npos;
+  }
+  EXPECT_TRUE(said);
+  TempDir dir;
+  const TumFolder tum = MakeTumFolder(dir, "rgbd_dataset_freiburg1_test");
+  try {
+    LoadDataset(tum.root, options);
+    ADD_FAILURE() << "a TUM RGB-D folder took a timeshift";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("applies to EuRoC/ASL recordings"), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

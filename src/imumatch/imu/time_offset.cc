@@ -1,0 +1,241 @@
+#include "imumatch/imu/time_offset.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+
+#include "imumatch/core/error.h"
+#include "imumatch/core/so3.h"
+#include "imumatch/core/time.h"
+
+namespace imumatch {
+
+void TimeOffsetOptions::Check() const {
+  IMUMATCH_CHECK(std::isfinite(max_offset_s) && max_offset_s > 0.0 && max_offset_s <= 1.0,
+                 "TimeOffsetOptions.max_offset_s must be in (0, 1] s, got " << max_offset_s);
+  IMUMATCH_CHECK(std::isfinite(step_s) && step_s > 0.0 && step_s * 4.0 <= max_offset_s,
+                 "TimeOffsetOptions.step_s must be in (0, max_offset_s / 4], got " << step_s);
+  IMUMATCH_CHECK(std::isfinite(gate_chi2) && gate_chi2 > 0.0,
+                 "TimeOffsetOptions.gate_chi2 must be > 0, got " << gate_chi2);
+  IMUMATCH_CHECK(std::isfinite(scale_sigma) && scale_sigma >= 0.0,
+                 "TimeOffsetOptions.scale_sigma must be >= 0, got " << scale_sigma);
+  IMUMATCH_CHECK(min_observations >= 2,
+                 "TimeOffsetOptions.min_observations must be >= 2, got " << min_observations);
+  IMUMATCH_CHECK(std::isfinite(max_sigma_s) && max_sigma_s > 0.0,
+                 "TimeOffsetOptions.max_sigma_s must be > 0, got " << max_sigma_s);
+}
+
+std::string TimeOffsetEstimate::Summary() const {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(1);
+  if (!measured) {
+    out << "not measured (" << reason << ")";
+    return out.str();
+  }
+  out << std::showpos << offset_s * 1e3 << std::noshowpos << " ms (+- " << sigma_s * 1e3 << " ms, "
+      << inliers << " of " << observations << " fitted rotations)";
+  return out.str();
+}
+
+std::string TimeOffsetAdvice(const TimeOffsetEstimate& estimate, double applied_shift_s) {
+  if (!estimate.measured || std::fabs(estimate.offset_s) < 0.002 ||
+      std::fabs(estimate.offset_s) <= 3.0 * estimate.sigma_s) {
+    return {};
+  }
+  const double total = applied_shift_s + estimate.offset_s;
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(1) << "the camera's and the IMU's clocks look "
+      << std::showpos << estimate.offset_s * 1e3 << std::noshowpos << " ms apart (+- "
+      << estimate.sigma_s * 1e3 << ") beyond the timeshift_cam_imu applied (" << std::defaultfloat
+      << std::setprecision(3) << applied_shift_s
+      << " s): the IMU's rotation between frames is read that far off, which the search windows "
+         "absorb at the cost of their size; set timeshift_cam_imu to "
+      << total << " s (cam0/sensor.yaml, or --timeshift-cam-imu " << total << ")";
+  return out.str();
+}
+
+namespace {
+
+// The gyro's rotation imu_a_from_imu_b over the samples (midpoint rule, as Preintegrate).
+Eigen::Quaterniond GyroRotation(const std::vector<ImuSample>& samples,
+                                const Eigen::Vector3d& bias) {
+  Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
+  for (size_t k = 0; k + 1 < samples.size(); ++k) {
+    const double dt = NsToSeconds(samples[k + 1].t_ns - samples[k].t_ns);
+    const Eigen::Vector3d w = 0.5 * (samples[k].gyro_rad_s + samples[k + 1].gyro_rad_s) - bias;
+    q = (q * ExpSO3(w * dt)).normalized();
+  }
+  return q;
+}
+
+struct Usable {
+  const RotationObservation* obs;
+  double dt;
+  Eigen::Matrix3d weight;  // inverse of the measurement's and the gyro's noise
+};
+
+struct GridCost {
+  double cost = std::numeric_limits<double>::infinity();
+  int inliers = 0;
+  double median = 0.0;  // of the observations' normalised squared residuals
+  Eigen::Vector3d db = Eigen::Vector3d::Zero();
+};
+
+// The gyro's rotation against each observation at one offset: r_i = Log(dR_gyro^T dR_i).
+std::vector<Eigen::Vector3d> ResidualsAt(const ImuBuffer& imu, const Eigen::Vector3d& bias,
+                                         const std::vector<Usable>& usable, int64_t offset_ns) {
+  std::vector<Eigen::Vector3d> r(usable.size());
+  for (size_t i = 0; i < usable.size(); ++i) {
+    const RotationObservation& o = *usable[i].obs;
+    const Eigen::Quaterniond gyro =
+        GyroRotation(imu.Slice(o.t_a_ns + offset_ns, o.t_b_ns + offset_ns), bias);
+    r[i] = LogSO3(gyro.conjugate() * o.imu_a_from_imu_b);
+  }
+  return r;
+}
+
+// The truncated cost of one offset's residuals, each normalised by its covariance times scale2,
+// with the bias correction solved on the inliers.
+GridCost CostOf(const std::vector<Eigen::Vector3d>& r, const std::vector<Usable>& usable,
+                double scale2, double gate) {
+  const size_t n = usable.size();
+  // A bias error db turns the gyro's rotation by about -dt db: r_i + dt_i db is what is left.
+  GridCost out;
+  std::vector<char> inlier(n, 1);
+  std::vector<double> c(n);
+  for (int iteration = 0; iteration < 4; ++iteration) {
+    Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d g = Eigen::Vector3d::Zero();
+    for (size_t i = 0; i < n; ++i) {
+      if (!inlier[i]) continue;
+      h += usable[i].dt * usable[i].dt * usable[i].weight;
+      g += usable[i].dt * usable[i].weight * r[i];
+    }
+    const Eigen::FullPivLU<Eigen::Matrix3d> lu(h);
+    GridCost next;
+    next.db = lu.isInvertible() ? Eigen::Vector3d(-lu.solve(g)) : out.db;
+    next.cost = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+      const Eigen::Vector3d e = r[i] + usable[i].dt * next.db;
+      c[i] = e.dot(usable[i].weight * e) / scale2;
+      inlier[i] = c[i] <= gate;
+      next.inliers += inlier[i];
+      next.cost += std::min(c[i], gate);
+    }
+    const auto mid = c.begin() + static_cast<std::ptrdiff_t>(n / 2);
+    std::nth_element(c.begin(), mid, c.end());
+    next.median = *mid;
+    if (iteration > 0 && !(next.cost < out.cost)) break;
+    out = next;
+  }
+  return out;
+}
+
+}  // namespace
+
+TimeOffsetEstimate EstimateTimeOffset(const ImuBuffer& imu, const ImuParams& params,
+                                      const Eigen::Vector3d& gyro_bias,
+                                      const std::vector<RotationObservation>& observations,
+                                      const TimeOffsetOptions& options) {
+  options.Check();
+  IMUMATCH_CHECK(gyro_bias.allFinite(), "EstimateTimeOffset: the gyro bias is not finite");
+  const int64_t max_ns = SecondsToNs(options.max_offset_s);
+  const int64_t step_ns = std::max<int64_t>(1, SecondsToNs(options.step_s));
+  std::vector<Usable> usable;
+  for (size_t i = 0; i < observations.size(); ++i) {
+    const RotationObservation& o = observations[i];
+    IMUMATCH_CHECK(o.t_b_ns > o.t_a_ns, "rotation observation " << i << ": t_b " << o.t_b_ns
+                                                                << " ns is not after t_a "
+                                                                << o.t_a_ns << " ns");
+    IMUMATCH_CHECK(
+        o.covariance.allFinite() && o.covariance.isApprox(o.covariance.transpose(), 1e-9),
+        "rotation observation " << i << ": covariance not finite and symmetric");
+    IMUMATCH_CHECK(std::isfinite(o.imu_a_from_imu_b.norm()) &&
+                       std::fabs(o.imu_a_from_imu_b.norm() - 1.0) < 1e-6,
+                   "rotation observation " << i << ": not a unit quaternion");
+    const Eigen::LLT<Eigen::Matrix3d> llt(o.covariance);
+    IMUMATCH_CHECK(llt.info() == Eigen::Success,
+                   "rotation observation " << i << ": covariance not positive definite");
+    std::vector<ImuSample> samples;
+    try {
+      // Covered, without a gap, at every offset of the grid.
+      samples = imu.Slice(o.t_a_ns - max_ns, o.t_b_ns + max_ns);
+    } catch (const Error&) {
+      continue;
+    }
+    const double dt = NsToSeconds(o.t_b_ns - o.t_a_ns);
+    const double angle = LogSO3(o.imu_a_from_imu_b).norm();
+    const double scale = options.scale_sigma * angle;
+    const Eigen::Matrix3d noise =
+        o.covariance +
+        Eigen::Matrix3d::Identity() *
+            (params.gyro_noise_density * params.gyro_noise_density * dt + scale * scale);
+    usable.push_back({&o, dt, noise.inverse()});
+  }
+  TimeOffsetEstimate est;
+  est.observations = static_cast<int>(usable.size());
+  if (est.observations < options.min_observations) {
+    est.reason = std::to_string(est.observations) + " fitted rotations inside the IMU log, " +
+                 std::to_string(options.min_observations) + " needed";
+    return est;
+  }
+  const int steps = static_cast<int>(max_ns / step_ns);
+  std::vector<std::vector<Eigen::Vector3d>> residuals;
+  for (int k = -steps; k <= steps; ++k) {
+    residuals.push_back(ResidualsAt(imu, gyro_bias, usable, k * step_ns));
+  }
+  // Real fits state their covariance optimistically: a first search finds the offset with the
+  // stated covariances, the observations' scatter there (the median normalised squared residual
+  // against a chi-square's with 3 dof, 2.366: robust to the fits that locked onto something else)
+  // scales them, and the search runs again. The sigma then reflects the scatter.
+  std::vector<GridCost> grid(residuals.size());
+  double scale2 = 1.0;
+  int best = steps;
+  for (int round = 0; round < 2; ++round) {
+    best = steps;
+    for (size_t k = 0; k < residuals.size(); ++k) {
+      grid[k] = CostOf(residuals[k], usable, scale2, options.gate_chi2);
+      if (grid[k].cost < grid[static_cast<size_t>(best)].cost) best = static_cast<int>(k);
+    }
+    scale2 *= std::max(1.0, grid[static_cast<size_t>(best)].median / 2.366);
+  }
+  est.cost_at_zero = grid[static_cast<size_t>(steps)].cost;
+  const GridCost& at = grid[static_cast<size_t>(best)];
+  est.cost = at.cost;
+  est.inliers = at.inliers;
+  est.gyro_bias_correction = at.db;
+  const double h = NsToSeconds(step_ns);
+  est.offset_s = (best - steps) * h;
+  if (best == 0 || best == 2 * steps) {
+    est.reason = "the cost falls towards the edge of the +-" +
+                 std::to_string(static_cast<int>(std::lround(options.max_offset_s * 1e3))) +
+                 " ms searched";
+    return est;
+  }
+  const double cm = grid[static_cast<size_t>(best - 1)].cost, c0 = at.cost,
+               cp = grid[static_cast<size_t>(best + 1)].cost;
+  const double second = (cm + cp - 2.0 * c0) / (h * h);  // d^2 cost / d offset^2
+  if (!(second > 0.0)) {
+    est.reason = "the fitted rotations do not vary enough to show an offset";
+    return est;
+  }
+  est.offset_s += 0.5 * h * (cm - cp) / (cm + cp - 2.0 * c0);
+  // The cost is a chi-square: it rises by 1 at one sigma of one parameter.
+  est.sigma_s = std::sqrt(2.0 / second);
+  if (est.sigma_s > options.max_sigma_s) {
+    std::ostringstream why;
+    why << std::fixed << std::setprecision(1) << "sigma " << est.sigma_s * 1e3
+        << " ms: the fitted rotations do not vary enough to show an offset";
+    est.reason = why.str();
+    return est;
+  }
+  est.measured = true;
+  return est;
+}
+
+}  // namespace imumatch

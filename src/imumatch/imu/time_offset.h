@@ -1,0 +1,87 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "imumatch/imu/imu_buffer.h"
+#include "imumatch/imu/imu_params.h"
+
+namespace imumatch {
+
+// The offset between the camera's and the IMU's clocks, measured from the rotations the camera
+// saw between frames.
+//
+// A camera and an IMU that are not triggered by one clock (a USB camera, a phone, a rig without
+// hardware synchronisation) timestamp the same instant differently: t_imu = t_cam + offset, a few
+// to tens of milliseconds, which Kalibr calls timeshift_cam_imu. The guided matcher integrates the
+// gyro over [t_a + offset, t_b + offset]; read over [t_a, t_b] instead, the rotation it predicts
+// is off by about (w(t_b) - w(t_a)) x offset, 0.2 deg for 20 ms of a 10 deg/s change of the
+// angular velocity, which the search windows absorb at the cost of their size.
+//
+// Each observation is a rotation measured between two camera times (the motion fitted to a
+// pair's matches: ImuRotationFromFit) with its covariance. For each candidate offset on a grid the
+// gyro is integrated over the shifted intervals (the midpoint rule, as Preintegrate) and compared
+// with the observations:
+//   r_i(offset) = Log(dR_gyro(t_a + offset, t_b + offset; b + db)^T dR_i),
+// weighted by the observation's covariance plus the gyro's white noise over the interval
+// (gyro_noise_density^2 x dt) and its scale-factor error, and truncated at gate_chi2 (a fit
+// locked onto a moving object does not pull the offset). A constant correction db of the given
+// gyro bias is solved with the offset (a bias error turns each rotation by -dt db; an offset by
+// the angular velocity's change over the pair: the two separate when the angular velocity
+// varies). The offset is the grid's minimum refined by a parabola; its sigma is the parabola's
+// (one parameter: the cost rises by 1 at 1 sigma). Real fits state their covariance
+// optimistically: the covariances are scaled by the observations' scatter at a first search's
+// offset (their median normalised squared residual against a chi-square's, robust to the
+// outliers) and the search runs again with them.
+struct TimeOffsetOptions {
+  double max_offset_s = 0.05;  // the grid spans [-max, max]
+  double step_s = 0.0005;
+  double gate_chi2 = 16.27;   // 3 dof, probability 0.999
+  double scale_sigma = 0.01;  // as GyroBiasFilterOptions::scale_sigma
+  int min_observations = 10;
+  // The offset counts as measured when its sigma is at most this (else the rotations did not
+  // vary enough to show it).
+  double max_sigma_s = 0.005;
+  void Check() const;  // throws InvalidArgument
+};
+
+// A rotation imu_a_from_imu_b measured between two camera times, with its covariance (3x3, right
+// perturbation, as GyroBiasFilter::Update takes it).
+struct RotationObservation {
+  int64_t t_a_ns = 0;
+  int64_t t_b_ns = 0;
+  Eigen::Quaterniond imu_a_from_imu_b = Eigen::Quaterniond::Identity();
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+};
+
+struct TimeOffsetEstimate {
+  bool measured = false;  // sigma_s <= max_sigma_s with enough observations
+  std::string reason;     // why not measured
+  double offset_s = 0.0;  // t_imu = t_cam + offset_s
+  double sigma_s = 0.0;
+  Eigen::Vector3d gyro_bias_correction = Eigen::Vector3d::Zero();  // db at the offset (rad/s)
+  int observations = 0;       // usable: their intervals lie in the log at every offset of the grid
+  int inliers = 0;            // within the gate at the offset
+  double cost_at_zero = 0.0;  // truncated cost at offset 0 and at offset_s
+  double cost = 0.0;
+  // "+9.8 ms (+- 0.4 ms, 183 of 190 fitted rotations)" or the reason, for reports.
+  std::string Summary() const;
+};
+
+// When the estimate says the clocks are worth aligning (measured, at least 2 ms and beyond 3
+// sigmas): advice to set timeshift_cam_imu to applied_shift_s + the offset, with why; else empty.
+std::string TimeOffsetAdvice(const TimeOffsetEstimate& estimate, double applied_shift_s);
+
+// Throws InvalidArgument for invalid options or observations (t_b <= t_a, a covariance that is not
+// finite and symmetric positive definite, a quaternion that is not unit); observations whose
+// shifted intervals leave the log or cross a gap at some offset of the grid are not used.
+TimeOffsetEstimate EstimateTimeOffset(const ImuBuffer& imu, const ImuParams& params,
+                                      const Eigen::Vector3d& gyro_bias,
+                                      const std::vector<RotationObservation>& observations,
+                                      const TimeOffsetOptions& options = {});
+
+}  // namespace imumatch

@@ -1,0 +1,185 @@
+#include "imumatch/imu/time_offset.h"
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "imumatch/core/error.h"
+#include "imumatch/core/so3.h"
+#include "imumatch/core/time.h"
+#include "imumatch/imu/imu_buffer.h"
+#include "imumatch/sim/imu_simulator.h"
+#include "imumatch/sim/trajectory.h"
+
+namespace imumatch {
+namespace {
+
+// A handheld shake (the sinusoid trajectory: angular velocity up to 0.25 rad/s, angular
+// acceleration up to 1.1 rad/s^2) sampled by the EuRoC IMU at 200 Hz with its white noise and a
+// constant gyro bias. A camera whose clock runs offset_s behind the IMU's (t_imu = t_cam +
+// offset) measures, between its frames at camera times t_a and t_b, the rotation the body made
+// between IMU times t_a + offset and t_b + offset.
+struct Shake {
+  SinusoidTrajectory traj;
+  ImuParams params = ImuParams::EurocAdis16448();
+  ImuBuffer buffer;
+  explicit Shake(const Eigen::Vector3d& bias)
+      : traj([] {
+          SinusoidTrajectory::Params p;
+          p.duration_s = 8.0;
+          return p;
+        }()) {
+    ImuSimulatorOptions sim;
+    sim.add_bias_walk = false;
+    sim.initial_bias.gyro = bias;
+    sim.seed = 5;
+    for (const ImuSample& s : SimulateImu(traj, params, sim)) buffer.Push(s);
+  }
+
+  // n frames at 20 Hz from camera time 0.5 s, rotations measured to sigma_meas rad.
+  std::vector<RotationObservation> Observe(double offset_s, int n, double sigma_meas,
+                                           std::mt19937_64& rng) const {
+    std::normal_distribution<double> normal(0.0, sigma_meas);
+    std::vector<RotationObservation> out;
+    for (int k = 0; k < n; ++k) {
+      const double ta = 0.5 + 0.05 * k, tb = ta + 0.05;
+      const Eigen::Quaterniond truth = traj.WorldFromBody(ta + offset_s).rotation.conjugate() *
+                                       traj.WorldFromBody(tb + offset_s).rotation;
+      RotationObservation o;
+      o.t_a_ns = SecondsToNs(ta);
+      o.t_b_ns = SecondsToNs(tb);
+      o.imu_a_from_imu_b = truth * ExpSO3(Eigen::Vector3d(normal(rng), normal(rng), normal(rng)));
+      o.covariance = Eigen::Matrix3d::Identity() * sigma_meas * sigma_meas;
+      out.push_back(o);
+    }
+    return out;
+  }
+};
+
+const Eigen::Vector3d kBias(0.012, -0.021, 0.078);  // MH_05's size
+
+// The offset that produced the measurements is found within 3 of its sigmas and 0.5 ms, for
+// either sign and for none; the sigma is what 120 rotations measured to 2e-4 rad allow
+// (sub-millisecond) and the search's edges are never reached.
+TEST(TimeOffset, RecoversTheOffsetTheMeasurementsWereTakenWith) {
+  const Shake s(kBias);
+  for (const double offset : {0.012, -0.007, 0.0, 0.031}) {
+    std::mt19937_64 rng(3);
+    const TimeOffsetEstimate est =
+        EstimateTimeOffset(s.buffer, s.params, kBias, s.Observe(offset, 120, 2e-4, rng));
+    ASSERT_TRUE(est.measured) << est.reason;
+    EXPECT_NEAR(est.offset_s, offset, std::max(3.0 * est.sigma_s, 5e-4)) << offset;
+    EXPECT_GT(est.sigma_s, 1e-5);
+    EXPECT_LT(est.sigma_s, 1e-3);
+    EXPECT_EQ(est.observations, 120);
+    EXPECT_GE(est.inliers, 118);
+    if (offset != 0.0) {
+      EXPECT_GT(est.cost_at_zero, est.cost + 25.0);
+    }
+  }
+}
+
+// A bias that was never estimated (zero given, the IMU's is kBias) turns every rotation by -dt b:
+// the offset is still found, and the correction solved with it is the bias.
+TEST(TimeOffset, SolvesAConstantBiasErrorWithTheOffset) {
+  const Shake s(kBias);
+  std::mt19937_64 rng(4);
+  const TimeOffsetEstimate est = EstimateTimeOffset(s.buffer, s.params, Eigen::Vector3d::Zero(),
+                                                    s.Observe(0.015, 120, 2e-4, rng));
+  ASSERT_TRUE(est.measured) << est.reason;
+  EXPECT_NEAR(est.offset_s, 0.015, std::max(3.0 * est.sigma_s, 5e-4));
+  EXPECT_LT((est.gyro_bias_correction - kBias).norm(), 2e-3)
+      << est.gyro_bias_correction.transpose();
+}
+
+// A tenth of the fits locked onto something else (rotations 2 deg off): truncated, they do not
+// move the offset, and they are not counted as inliers.
+TEST(TimeOffset, IgnoresFitsThatLockedOntoSomethingElse) {
+  const Shake s(kBias);
+  std::mt19937_64 rng(5);
+  std::vector<RotationObservation> obs = s.Observe(0.010, 120, 2e-4, rng);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  for (size_t k = 0; k < obs.size(); k += 10) {
+    const Eigen::Vector3d axis =
+        Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng)).normalized();
+    obs[k].imu_a_from_imu_b = obs[k].imu_a_from_imu_b * ExpSO3(axis * 2.0 * M_PI / 180.0);
+  }
+  const TimeOffsetEstimate est = EstimateTimeOffset(s.buffer, s.params, kBias, obs);
+  ASSERT_TRUE(est.measured) << est.reason;
+  EXPECT_NEAR(est.offset_s, 0.010, std::max(3.0 * est.sigma_s, 5e-4));
+  EXPECT_LE(est.inliers, 108);
+  EXPECT_GE(est.inliers, 106);
+}
+
+// Turning at a constant rate, every offset gives the same rotations: nothing is measured, and the
+// report says why instead of giving a number.
+TEST(TimeOffset, ConstantAngularVelocityShowsNoOffset) {
+  ImuParams params = ImuParams::EurocAdis16448();
+  ImuBuffer buffer;
+  const Eigen::Vector3d w(0.1, -0.3, 0.5);
+  for (int64_t k = 0; k <= 1600; ++k) {
+    ImuSample sample;
+    sample.t_ns = k * 5'000'000;
+    sample.gyro_rad_s = w;
+    sample.accel_m_s2 = Eigen::Vector3d(0.0, 0.0, 9.81);
+    buffer.Push(sample);
+  }
+  std::vector<RotationObservation> obs;
+  for (int k = 0; k < 100; ++k) {
+    RotationObservation o;
+    o.t_a_ns = SecondsToNs(0.5 + 0.05 * k);
+    o.t_b_ns = o.t_a_ns + SecondsToNs(0.05);
+    o.imu_a_from_imu_b = ExpSO3(w * 0.05);
+    o.covariance = Eigen::Matrix3d::Identity() * 4e-8;
+    obs.push_back(o);
+  }
+  const TimeOffsetEstimate est = EstimateTimeOffset(buffer, params, Eigen::Vector3d::Zero(), obs);
+  EXPECT_FALSE(est.measured);
+  EXPECT_NE(est.reason.find("do not vary enough"), std::string::npos) << est.reason;
+  EXPECT_NE(est.Summary().find("not measured"), std::string::npos);
+}
+
+// Rotations outside the log at some offset of the search are not used; too few left is said.
+TEST(TimeOffset, NeedsObservationsInsideTheLogAtEveryOffset) {
+  const Shake s(kBias);
+  std::mt19937_64 rng(6);
+  std::vector<RotationObservation> obs = s.Observe(0.0, 5, 2e-4, rng);
+  RotationObservation early = obs[0];
+  early.t_a_ns = SecondsToNs(0.01);  // 0.01 - 0.05 s is before the log
+  early.t_b_ns = SecondsToNs(0.06);
+  obs.push_back(early);
+  const TimeOffsetEstimate est = EstimateTimeOffset(s.buffer, s.params, kBias, obs);
+  EXPECT_FALSE(est.measured);
+  EXPECT_EQ(est.observations, 5);
+  EXPECT_NE(est.reason.find("5 fitted rotations inside the IMU log, 10 needed"), std::string::npos)
+      << est.reason;
+}
+
+TEST(TimeOffset, RefusesInvalidObservationsAndOptions) {
+  const Shake s(kBias);
+  std::mt19937_64 rng(7);
+  const std::vector<RotationObservation> good = s.Observe(0.0, 20, 2e-4, rng);
+  std::vector<RotationObservation> obs = good;
+  obs[3].t_b_ns = obs[3].t_a_ns;
+  EXPECT_THROW(EstimateTimeOffset(s.buffer, s.params, kBias, obs), InvalidArgument);
+  obs = good;
+  obs[4].imu_a_from_imu_b.coeffs() *= 2.0;
+  EXPECT_THROW(EstimateTimeOffset(s.buffer, s.params, kBias, obs), InvalidArgument);
+  obs = good;
+  obs[5].covariance(0, 0) = std::nan("");
+  EXPECT_THROW(EstimateTimeOffset(s.buffer, s.params, kBias, obs), InvalidArgument);
+  obs = good;
+  obs[6].covariance = -obs[6].covariance;
+  EXPECT_THROW(EstimateTimeOffset(s.buffer, s.params, kBias, obs), InvalidArgument);
+  TimeOffsetOptions bad;
+  bad.step_s = 0.03;  // more than a quarter of the range
+  EXPECT_THROW(EstimateTimeOffset(s.buffer, s.params, kBias, good, bad), InvalidArgument);
+  bad = TimeOffsetOptions();
+  bad.max_offset_s = std::nan("");
+  EXPECT_THROW(EstimateTimeOffset(s.buffer, s.params, kBias, good, bad), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace imumatch
