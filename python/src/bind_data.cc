@@ -147,6 +147,15 @@ py::object Evaluate(EvalSource source, const std::vector<std::string>& detectors
   out["threshold"] = threshold.description;
   out["threshold_px"] = threshold.threshold_px;
   out["notes"] = notes;
+  out["warnings"] = result.warnings;
+  py::list offsets;  // per case and detector, with a recorded IMU
+  for (const EvaluationResult::TimeOffset& t : result.time_offsets) {
+    py::dict d = TimeOffsetToDict(t.estimate);
+    d["case"] = t.case_name;
+    d["detector"] = ToString(t.detector);
+    offsets.append(d);
+  }
+  out["time_offsets"] = offsets;
   out["skipped"] = skipped;
   out["pairs"] = pairs.size();
   out["wall_s"] = result.wall_s;
@@ -353,8 +362,11 @@ stay exact. Rendering costs ~0.1 s per 640 x 480 frame.)");
       R"(Compares IMU-guided and brute-force matching on a dataset (a path, a Dataset or a
 SyntheticSequence), judged by its ground truth, as `imumatch eval` does. Returns the summary: one
 dict per case, detector and method (matches, correct, false, precision, recall, window_recall,
-times in ms, threshold_px). details=True returns {'rows', 'threshold', 'notes', 'skipped',
-'bf_correct_fate', ...}; bf_correct_fate: per prediction method, summed over the pairs, what it
+times in ms, threshold_px). details=True returns {'rows', 'threshold', 'notes', 'warnings',
+'skipped', 'bf_correct_fate', 'time_offsets', ...}; time_offsets: with a recorded IMU, per case
+and detector, the camera's clock offset from the IMU's that the fitted rotations measure
+(t_imu = t_cam + offset_s: measured, offset_s, sigma_s, observations, inliers, reason);
+bf_correct_fate: per prediction method, summed over the pairs, what it
 made of brute force's correct matches (kept, matched_wrong, not matched by reason) and the
 correct matches it gained where brute force had none.
 second_pass=False: the guided method matches once, in the IMU's windows (`--single-pass`).

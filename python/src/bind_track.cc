@@ -194,19 +194,8 @@ an empty image, or a time not after the previous frame's.)")
         out["frames"] = frames;
         out["notes"] = result.notes;
         out["warnings"] = result.warnings;
-        if (result.time_offset) {
-          const TimeOffsetEstimate& t = *result.time_offset;
-          py::dict offset;
-          offset["measured"] = t.measured;
-          offset["offset_s"] = t.offset_s;
-          offset["sigma_s"] = t.sigma_s;
-          offset["observations"] = t.observations;
-          offset["inliers"] = t.inliers;
-          offset["reason"] = t.reason;
-          out["time_offset"] = offset;
-        } else {
-          out["time_offset"] = py::none();
-        }
+        out["time_offset"] =
+            result.time_offset ? py::object(TimeOffsetToDict(*result.time_offset)) : py::none();
         out["fallbacks"] = result.FallbackCount();
         out["has_truth"] = result.has_truth;
         if (result.has_truth && result.rpe.pairs() > 0) {

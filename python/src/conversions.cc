@@ -200,4 +200,15 @@ ImuSample ImuSampleFromPython(int64_t t_ns, const py::handle& gyro, const py::ha
   return s;
 }
 
+py::dict TimeOffsetToDict(const TimeOffsetEstimate& estimate) {
+  py::dict out;
+  out["measured"] = estimate.measured;
+  out["offset_s"] = estimate.offset_s;
+  out["sigma_s"] = estimate.sigma_s;
+  out["observations"] = estimate.observations;
+  out["inliers"] = estimate.inliers;
+  out["reason"] = estimate.reason;
+  return out;
+}
+
 }  // namespace imumatch::python

@@ -13,6 +13,7 @@
 #include "imumatch/camera/pinhole_camera.h"
 #include "imumatch/core/types.h"
 #include "imumatch/eval/frame_source.h"
+#include "imumatch/imu/time_offset.h"
 #include "imumatch/matching/match_types.h"
 #include "imumatch/matching/predictor.h"
 
@@ -60,6 +61,10 @@ struct Predictions {
 // The `dataset` argument of evaluate() and track(): a SyntheticSequence (exact truth, in memory),
 // a Dataset, or a path (LoadDatasetOrPosePair with the simulated IMU's model and seed; with
 // check_files_exist false a missing image is a bad frame found when it is read).
+// {"measured", "offset_s", "sigma_s", "observations", "inliers", "reason"}: t_imu = t_cam +
+// offset_s, as eval and track report it.
+py::dict TimeOffsetToDict(const TimeOffsetEstimate& estimate);
+
 EvalSource SourceFromPython(const py::object& dataset, const std::string& imu_model, uint64_t seed,
                             bool check_files_exist = true);
 

@@ -180,6 +180,16 @@ def test_a_synthetic_sequence_written_in_both_layouts_loads_back(tmp_path):
                                              "sensor.yaml")).width == 752
 
 
+def test_evaluate_reports_the_cameras_clock_offset_on_the_real_flight():
+    out = imumatch.evaluate(os.path.join(data_dir(), "euroc_mh05_flight"), detectors=["orb"],
+                            methods=["guided"], max_pairs=40, details=True)
+    (t,) = out["time_offsets"]
+    assert t["case"] == "euroc_mh05_flight" and t["detector"] == "orb"
+    assert t["measured"], t["reason"]
+    assert abs(t["offset_s"]) < max(3 * t["sigma_s"], 0.0015)
+    assert not any("clocks look" in w for w in out["warnings"])
+
+
 def test_track_measures_the_cameras_clock_offset_on_the_real_flight():
     # MH_05's camera is triggered by the IMU's clock: the fitted rotations of 60 frames find no
     # offset worth setting, and say how well they know it.

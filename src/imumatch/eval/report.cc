@@ -217,6 +217,18 @@ nlohmann::json ReportToJson(const EvaluationResult& result, const ReportContext&
   j["wall_s"] = result.wall_s;
   j["notes"] = result.notes;
   j["warnings"] = result.warnings;
+  json offsets = json::array();  // the camera's clock offset from the IMU's, t_imu = t_cam + offset
+  for (const EvaluationResult::TimeOffset& offset : result.time_offsets) {
+    offsets.push_back({{"case", offset.case_name},
+                       {"detector", ToString(offset.detector)},
+                       {"measured", offset.estimate.measured},
+                       {"offset_s", offset.estimate.offset_s},
+                       {"sigma_s", offset.estimate.sigma_s},
+                       {"observations", offset.estimate.observations},
+                       {"inliers", offset.estimate.inliers},
+                       {"reason", offset.estimate.reason}});
+  }
+  j["time_offsets"] = offsets;
   json summary = json::array();
   for (const auto& s : Summarize(result.records, thr)) {
     summary.push_back({{"case", s.case_name},

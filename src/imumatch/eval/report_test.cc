@@ -177,6 +177,24 @@ TEST(ReportTest, JsonRoundTrip) {
   EXPECT_EQ(j["config"]["detectors"], "orb");
   EXPECT_TRUE(j["end_to_end"].is_null());
   EXPECT_EQ(j["precision_at"].size(), 4u);  // 2 thresholds x 2 rows
+  EXPECT_TRUE(j["time_offsets"].empty());   // none measured (no recorded IMU)
+  // A measured clock offset is written per case and detector.
+  EvaluationResult with_offset = HandMadeResult();
+  TimeOffsetEstimate est;
+  est.measured = true;
+  est.offset_s = 0.0098;
+  est.sigma_s = 2e-4;
+  est.observations = 149;
+  est.inliers = 141;
+  with_offset.time_offsets.push_back({"front,1m", DetectorKind::kOrb, est});
+  const nlohmann::json k = ReportToJson(with_offset, ctx);
+  ASSERT_EQ(k["time_offsets"].size(), 1u);
+  EXPECT_EQ(k["time_offsets"][0]["case"], "front,1m");
+  EXPECT_EQ(k["time_offsets"][0]["detector"], "orb");
+  EXPECT_TRUE(k["time_offsets"][0]["measured"].get<bool>());
+  EXPECT_DOUBLE_EQ(k["time_offsets"][0]["offset_s"].get<double>(), 0.0098);
+  EXPECT_DOUBLE_EQ(k["time_offsets"][0]["sigma_s"].get<double>(), 2e-4);
+  EXPECT_EQ(k["time_offsets"][0]["inliers"].get<int>(), 141);
 }
 
 TEST(ReportTest, WritesFilesAndPlots) {
