@@ -514,6 +514,7 @@ TEST(Dataset, AGivenTimeshiftMovesTheFramesIntoTheImusClock) {
     EXPECT_NE(std::string(e.what()).find("applies to EuRoC/ASL recordings"), std::string::npos)
         << e.what();
   }
+  EXPECT_THROW(LoadDatasetOrPosePair(DataPath("tum_fr1_xyz_pair"), options), InvalidArgument);
 }
 
 }  // namespace

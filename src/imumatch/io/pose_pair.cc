@@ -49,6 +49,11 @@ Dataset LoadPosePairFolder(const std::string& dir, const PinholeCamera& camera,
 
 Dataset LoadDatasetOrPosePair(const std::string& path, const DatasetOptions& options) {
   if (!IsPosePairFolder(path)) return LoadDataset(path, options);
+  if (options.timeshift_cam_imu_s) {
+    throw InvalidArgument(path +
+                          ": a timeshift_cam_imu applies to EuRoC/ASL recordings; this is a "
+                          "two-frame pose pair, without an IMU");
+  }
   return options.camera ? LoadPosePairFolder(path, *options.camera) : LoadPosePairFolder(path);
 }
 
