@@ -33,6 +33,7 @@ struct TrackArgs {
   bool no_neighbour_depth = false;
   bool monocular = false;
   bool fixed_gyro_bias = false;
+  bool estimate_time_offset = false;
   bool fixed_segments = false;
   double still_s = 0.5;
   size_t first = 0;
@@ -56,6 +57,7 @@ void RunTrackCommand(const TrackArgs& a) {
   o.front_end.neighbour_depth.enabled = !a.no_neighbour_depth;
   o.monocular = a.monocular;
   o.front_end.learn_gyro_bias = !a.fixed_gyro_bias;
+  o.front_end.estimate_time_offset = a.estimate_time_offset;
   o.front_end.prediction.scene_near.enabled = !a.fixed_segments;
   o.front_end.still_s = a.still_s;
   IMUMATCH_REQUIRE(a.max_frames != 1,
@@ -152,6 +154,11 @@ void AddTrackCommand(CLI::App& app) {
   cmd->add_flag("--no-neighbour-depth", a->no_neighbour_depth,
                 "second pass: search keypoints without depth along their whole segment, not along "
                 "the inverse depths their matched neighbours show");
+  cmd->add_flag(
+      "--estimate-time-offset", a->estimate_time_offset,
+      "estimate the camera's clock offset from the IMU's from the fitted rotations as the "
+      "run goes and read the IMU in the camera's clock (a camera not triggered by the "
+      "IMU, its timeshift not calibrated)");
   cmd->add_flag("--fixed-gyro-bias", a->fixed_gyro_bias,
                 "without a still start, keep the gyro bias at zero (do not learn it from the "
                 "rotations the fitted motions measure; after a still start it is never learnt)");

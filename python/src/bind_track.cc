@@ -163,9 +163,9 @@ an empty image, or a time not after the previous frame's.)")
   m.def(
       "track",
       [](const py::object& dataset, const std::string& detector, int max_keypoints, bool hybrid,
-         bool second_pass, bool monocular, double still_s, bool learn_gyro_bias, size_t first_frame,
-         size_t max_frames, const std::vector<double>& thresholds_px, const std::string& imu_model,
-         uint64_t seed) {
+         bool second_pass, bool monocular, double still_s, bool learn_gyro_bias,
+         bool estimate_time_offset, size_t first_frame, size_t max_frames,
+         const std::vector<double>& thresholds_px, const std::string& imu_model, uint64_t seed) {
         // A missing image is a bad frame, as in `imumatch track`.
         const EvalSource source =
             SourceFromPython(dataset, imu_model, seed, /*check_files_exist=*/false);
@@ -176,6 +176,7 @@ an empty image, or a time not after the previous frame's.)")
         o.front_end.second_pass = second_pass;
         o.front_end.still_s = still_s;
         o.front_end.learn_gyro_bias = learn_gyro_bias;
+        o.front_end.estimate_time_offset = estimate_time_offset;
         o.monocular = monocular;
         o.first_frame = first_frame;
         o.max_frames = max_frames;
@@ -214,13 +215,15 @@ an empty image, or a time not after the previous frame's.)")
       },
       py::arg("dataset"), py::arg("detector") = "orb", py::arg("max_keypoints") = 1000,
       py::arg("hybrid") = false, py::arg("second_pass") = true, py::arg("monocular") = false,
-      py::arg("still_s") = 0.5, py::arg("learn_gyro_bias") = true, py::arg("first_frame") = 0,
+      py::arg("still_s") = 0.5, py::arg("learn_gyro_bias") = true,
+      py::arg("estimate_time_offset") = false, py::arg("first_frame") = 0,
       py::arg("max_frames") = 0, py::arg("thresholds_px") = std::vector<double>{1.0, 3.0, 8.0},
       py::arg("imu_model") = "euroc", py::arg("seed") = 42,
       R"(Runs the front end as `imumatch track` does: the dataset (a path, a Dataset or a
 SyntheticSequence) fed frame by frame with its IMU, no ground truth given to it; gravity and gyro
 bias from still_s seconds of still IMU (before the first frame, else at the log's start); without
-them the bias is learnt from the fits (learn_gyro_bias). Returns {"frames": [per frame: status ('first', 'guided' or
+them the bias is learnt from the fits (learn_gyro_bias). estimate_time_offset: read the IMU in
+the camera's clock, its offset estimated from the fits as the run goes (`--estimate-time-offset`). Returns {"frames": [per frame: status ('first', 'guided' or
 'brute_force'), event, matches (final pass), matches_pass1, world_from_cam (Rigid3d, None
 while the IMU initialises), velocity, precision per threshold and relative pose error to the
 previous frame when the dataset has ground truth], "notes", "warnings", "time_offset" (the

@@ -54,10 +54,15 @@ TrackRunResult RunTrack(const EvalSource& source, const TrackRunOptions& options
   std::vector<std::optional<Rigid3d>> estimated, truth;
   for (size_t k = first; k < end; ++k) {
     const FrameRecord& fr = d.frames[k];
-    // The IMU up to one sample past the frame (the integration interpolates at its timestamp).
+    // The IMU up to one sample past the frame (the integration interpolates at its timestamp),
+    // or past the frame plus the largest offset an estimated camera clock offset may take.
+    const int64_t imu_until =
+        fr.t_ns + (options.front_end.estimate_time_offset
+                       ? SecondsToNs(options.front_end.time_offset.max_offset_s)
+                       : 0);
     while (next_imu < imu.size()) {
       fe.AddImu(imu[next_imu]);
-      if (imu[next_imu++].t_ns >= fr.t_ns) break;
+      if (imu[next_imu++].t_ns >= imu_until) break;
     }
     TrackFrameRecord rec;
     rec.frame = k;
@@ -153,8 +158,18 @@ TrackRunResult RunTrack(const EvalSource& source, const TrackRunOptions& options
     out.notes.push_back(
         "camera-IMU time offset measured from the fitted rotations (t_imu = t_cam + offset): " +
         offset.Summary());
-    const std::string advice = TimeOffsetAdvice(offset, d.timeshift_cam_imu_s);
-    if (!advice.empty()) out.warnings.push_back(advice);
+    out.imu_time_offset_s = NsToSeconds(fe.imu_time_offset_ns());
+    if (const std::optional<TimeOffsetEstimate>& online = fe.online_time_offset(); online) {
+      std::ostringstream note;
+      note << "the IMU was read in the camera's clock, offset by the estimate of the last "
+           << online->observations << " fitted rotations: " << std::showpos << std::fixed
+           << std::setprecision(1) << NsToSeconds(fe.imu_time_offset_ns()) * 1e3 << std::noshowpos
+           << " ms at the end of the run (last estimate: " << online->Summary() << ")";
+      out.notes.push_back(note.str());
+    } else if (const std::string advice = TimeOffsetAdvice(offset, d.timeshift_cam_imu_s);
+               !advice.empty()) {
+      out.warnings.push_back(advice);
+    }
   }
   out.has_truth =
       std::any_of(truth.begin(), truth.end(), [](const auto& t) { return t.has_value(); });

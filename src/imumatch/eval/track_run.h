@@ -51,6 +51,9 @@ struct TrackRunResult {
   // The camera's clock offset from the IMU's, measured from the front end's fitted rotations
   // (a recorded IMU with fits), and the advice to set it when it is worth it (warnings).
   std::optional<TimeOffsetEstimate> time_offset;
+  // The offset the front end read the IMU with at the end (FrontEndOptions::estimate_time_offset;
+  // else 0).
+  double imu_time_offset_s = 0.0;
   std::vector<std::string> warnings;
   RelativePoseError rpe;
   std::vector<PairVisual> visuals;

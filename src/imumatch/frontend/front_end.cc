@@ -30,6 +30,10 @@ void FrontEndOptions::Check() const {
   refit.Check();
   neighbour_depth.Check();
   gyro_bias_filter.Check();
+  time_offset.Check();
+  IMUMATCH_CHECK(time_offset_window >= time_offset.min_observations,
+                 "time_offset_window=" << time_offset_window << " (at least "
+                                       << time_offset.min_observations << ")");
   IMUMATCH_CHECK(std::isfinite(still_s) && still_s >= 0.0 && still_s <= 3600.0,
                  "still_s=" << still_s);
   IMUMATCH_CHECK(std::isfinite(unknown_velocity_sigma) && unknown_velocity_sigma > 0.0,
@@ -67,6 +71,7 @@ FrontEnd::FrontEnd(const PinholeCamera& camera, const ImuParams& imu_params,
   options.Check();
   velocity_sigma_ = options.unknown_velocity_sigma;
   // The fits' rotations are a second solve: only when something reads them.
+  if (options_.estimate_time_offset) options_.keep_fitted_rotations = true;
   if (options_.keep_fitted_rotations) options_.refit.measure_rotation = true;
 }
 
@@ -271,9 +276,22 @@ void FrontEnd::UseFittedRotation(const MotionRefit& refit, int64_t t_a_ns, int64
           {t_a_ns, t_b_ns, measured->imu_a_from_imu_b, measured->covariance});
     }
   }
+  if (options_.estimate_time_offset && fitted_rotations_.size() >= rotations_at_estimate_ + 10 &&
+      static_cast<int>(fitted_rotations_.size()) >= options_.time_offset.min_observations) {
+    rotations_at_estimate_ = fitted_rotations_.size();
+    const size_t window = static_cast<size_t>(options_.time_offset_window);
+    const std::vector<RotationObservation> recent(
+        fitted_rotations_.end() -
+            static_cast<std::ptrdiff_t>(std::min(window, fitted_rotations_.size())),
+        fitted_rotations_.end());
+    TimeOffsetEstimate estimate =
+        EstimateTimeOffset(imu_, imu_params_, bias_.gyro, recent, options_.time_offset);
+    if (estimate.measured) imu_offset_ns_ = SecondsToNs(estimate.offset_s);
+    online_offset_ = std::move(estimate);
+  }
   if (!gyro_bias_filter_) return;
-  UpdateGyroBiasFromFit(refit, cam_from_imu_, imu_, imu_params_, t_a_ns, t_b_ns,
-                        &*gyro_bias_filter_);
+  UpdateGyroBiasFromFit(refit, cam_from_imu_, imu_, imu_params_, t_a_ns + imu_offset_ns_,
+                        t_b_ns + imu_offset_ns_, &*gyro_bias_filter_);
   bias_.gyro = gyro_bias_filter_->bias();
   gyro_bias_sigma_ = gyro_bias_filter_->SigmaAt(t_b_ns);
   bias_t_ns_ = t_b_ns;
@@ -351,9 +369,11 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
     mo.gyro_bias_sigma =
         std::sqrt(gyro_bias_sigma_ * gyro_bias_sigma_ +
                   imu_params_.gyro_random_walk * imu_params_.gyro_random_walk * since);
+    // The frames' stamps in the IMU's clock (estimate_time_offset; else the same).
+    const int64_t imu_a_ns = prev.t_ns + imu_offset_ns_, imu_b_ns = frame.t_ns + imu_offset_ns_;
     result.imu_motion =
-        ComputeCameraMotion(imu_, prev.t_ns, frame.t_ns, state, imu_params_, cam_from_imu_, mo);
-    pim = Preintegrate(imu_.Slice(prev.t_ns, frame.t_ns), bias_, imu_params_);
+        ComputeCameraMotion(imu_, imu_a_ns, imu_b_ns, state, imu_params_, cam_from_imu_, mo);
+    pim = Preintegrate(imu_.Slice(imu_a_ns, imu_b_ns), bias_, imu_params_);
   } catch (const Error& e) {
     imu_ok = false;
     result.event = std::string("IMU gap: ") + e.what();
@@ -503,7 +523,7 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
   Eigen::Quaterniond attitude = world_from_imu_b.rotation;
   if (imu_ok) {
     NavState a;
-    a.t_ns = prev.t_ns;
+    a.t_ns = pim.t0_ns;  // the previous frame in the IMU's clock (estimate_time_offset)
     a.world_from_imu = world_from_imu_;
     a.velocity_in_world = velocity_;
     const NavState b = Propagate(a, pim, imu_params_.gravity_in_world);

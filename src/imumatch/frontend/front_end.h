@@ -81,6 +81,15 @@ struct FrontEndOptions {
   // Keep the rotations the second pass's fits measure (fitted_rotations()), for
   // EstimateTimeOffset: the camera's clock offset from the IMU's, measured over a run.
   bool keep_fitted_rotations = true;
+  // Estimate that offset as the run goes and read the IMU in the camera's clock: over
+  // [t_a + offset, t_b + offset] for frames stamped t_a, t_b (a camera not triggered by the IMU's
+  // clock, whose timeshift is not calibrated). EstimateTimeOffset runs over the last
+  // time_offset_window fitted rotations each time 10 more have come, and a measured offset
+  // replaces the one in use. The IMU must then be fed up to the frame's time plus
+  // time_offset.max_offset_s. Off: the IMU is read at the frames' stamps.
+  bool estimate_time_offset = false;
+  TimeOffsetOptions time_offset;
+  int time_offset_window = 100;
   // Velocity uncertainty (m/s per axis) when nothing constrains it: after a loss or an IMU gap.
   double unknown_velocity_sigma = 1.0;
   double min_velocity_sigma = 0.02;
@@ -160,6 +169,10 @@ class FrontEnd {
   const GyroBiasFilter* gyro_bias_filter() const {
     return gyro_bias_filter_ ? &*gyro_bias_filter_ : nullptr;
   }
+  // The offset in use (estimate_time_offset; 0 until one is measured): t_imu = t_cam + offset,
+  // and the estimate it came from.
+  int64_t imu_time_offset_ns() const { return imu_offset_ns_; }
+  const std::optional<TimeOffsetEstimate>& online_time_offset() const { return online_offset_; }
   // The rotations the second pass's fits measured (keep_fitted_rotations), in frame order.
   const std::vector<RotationObservation>& fitted_rotations() const { return fitted_rotations_; }
 
@@ -210,6 +223,9 @@ class FrontEnd {
   int64_t bias_t_ns_ = 0;
   std::optional<GyroBiasFilter> gyro_bias_filter_;
   std::vector<RotationObservation> fitted_rotations_;
+  int64_t imu_offset_ns_ = 0;
+  size_t rotations_at_estimate_ = 0;
+  std::optional<TimeOffsetEstimate> online_offset_;
 };
 
 }  // namespace imumatch
