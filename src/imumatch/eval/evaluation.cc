@@ -433,7 +433,7 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
                                         : bias.from_still_start ? bias.bias.gyro
                                                                 : Eigen::Vector3d::Zero();
       const TimeOffsetEstimate offset =
-          EstimateTimeOffset(dataset.imu, dataset.imu_params, gyro_bias, fitted_rotations[d]);
+          TryEstimateTimeOffset(dataset.imu, dataset.imu_params, gyro_bias, fitted_rotations[d]);
       result.time_offsets.push_back({name, options.detectors[d], offset});
       const std::string detector = ToString(options.detectors[d]);
       result.notes.push_back(name + ": " + detector +

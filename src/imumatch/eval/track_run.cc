@@ -153,7 +153,7 @@ TrackRunResult RunTrack(const EvalSource& source, const TrackRunOptions& options
   if (!d.imu_simulated && !fe.fitted_rotations().empty()) {
     // The fitted rotations measure the camera's clock offset from the IMU's.
     const TimeOffsetEstimate offset =
-        EstimateTimeOffset(d.imu, d.imu_params, fe.gyro_bias(), fe.fitted_rotations());
+        TryEstimateTimeOffset(d.imu, d.imu_params, fe.gyro_bias(), fe.fitted_rotations());
     out.time_offset = offset;
     out.notes.push_back(
         "camera-IMU time offset measured from the fitted rotations (t_imu = t_cam + offset): " +

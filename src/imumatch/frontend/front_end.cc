@@ -285,8 +285,8 @@ void FrontEnd::UseFittedRotation(const MotionRefit& refit, int64_t t_a_ns, int64
             static_cast<std::ptrdiff_t>(std::min(window, fitted_rotations_.size())),
         fitted_rotations_.end());
     TimeOffsetEstimate estimate =
-        EstimateTimeOffset(imu_, imu_params_, bias_.gyro, recent, options_.time_offset);
-    if (estimate.measured) imu_offset_ns_ = SecondsToNs(estimate.offset_s);
+        TryEstimateTimeOffset(imu_, imu_params_, bias_.gyro, recent, options_.time_offset);
+    if (estimate.measured) imu_offset_ns_ = SecondsToNs(estimate.offset_s);  // else kept
     online_offset_ = std::move(estimate);
   }
   if (!gyro_bias_filter_) return;

@@ -238,4 +238,17 @@ TimeOffsetEstimate EstimateTimeOffset(const ImuBuffer& imu, const ImuParams& par
   return est;
 }
 
+TimeOffsetEstimate TryEstimateTimeOffset(const ImuBuffer& imu, const ImuParams& params,
+                                         const Eigen::Vector3d& gyro_bias,
+                                         const std::vector<RotationObservation>& observations,
+                                         const TimeOffsetOptions& options) {
+  try {
+    return EstimateTimeOffset(imu, params, gyro_bias, observations, options);
+  } catch (const Error& e) {
+    TimeOffsetEstimate est;
+    est.reason = e.what();
+    return est;
+  }
+}
+
 }  // namespace imumatch

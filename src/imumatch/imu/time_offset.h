@@ -79,6 +79,12 @@ std::string TimeOffsetAdvice(const TimeOffsetEstimate& estimate, double applied_
 // Throws InvalidArgument for invalid options or observations (t_b <= t_a, a covariance that is not
 // finite and symmetric positive definite, a quaternion that is not unit); observations whose
 // shifted intervals leave the log or cross a gap at some offset of the grid are not used.
+// TryEstimateTimeOffset: the same, an error turned into an estimate not measured, with the
+// error as its reason (for reports that must not stop on it).
+TimeOffsetEstimate TryEstimateTimeOffset(const ImuBuffer& imu, const ImuParams& params,
+                                         const Eigen::Vector3d& gyro_bias,
+                                         const std::vector<RotationObservation>& observations,
+                                         const TimeOffsetOptions& options = {});
 TimeOffsetEstimate EstimateTimeOffset(const ImuBuffer& imu, const ImuParams& params,
                                       const Eigen::Vector3d& gyro_bias,
                                       const std::vector<RotationObservation>& observations,

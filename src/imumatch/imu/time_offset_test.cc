@@ -167,6 +167,11 @@ TEST(TimeOffset, RefusesInvalidObservationsAndOptions) {
   obs = good;
   obs[4].imu_a_from_imu_b.coeffs() *= 2.0;
   EXPECT_THROW(EstimateTimeOffset(s.buffer, s.params, kBias, obs), InvalidArgument);
+  // For reports: the error as the reason of an estimate not measured.
+  const TimeOffsetEstimate tried = TryEstimateTimeOffset(s.buffer, s.params, kBias, obs);
+  EXPECT_FALSE(tried.measured);
+  EXPECT_NE(tried.reason.find("rotation observation 4: not a unit quaternion"), std::string::npos)
+      << tried.reason;
   obs = good;
   obs[5].covariance(0, 0) = std::nan("");
   EXPECT_THROW(EstimateTimeOffset(s.buffer, s.params, kBias, obs), InvalidArgument);
