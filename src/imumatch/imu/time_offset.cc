@@ -30,6 +30,16 @@ void TimeOffsetOptions::Check() const {
                  "TimeOffsetOptions.max_sigma_s must be > 0, got " << max_sigma_s);
 }
 
+namespace {
+
+// Milliseconds to one decimal with their sign, "+0.0" for what rounds to zero (not "-0.0").
+double TenthsOfMs(double seconds) {
+  const double tenths = std::round(seconds * 1e4);
+  return tenths == 0.0 ? 0.0 : tenths / 10.0;
+}
+
+}  // namespace
+
 std::string TimeOffsetEstimate::Summary() const {
   std::ostringstream out;
   out << std::fixed << std::setprecision(1);
@@ -37,8 +47,8 @@ std::string TimeOffsetEstimate::Summary() const {
     out << "not measured (" << reason << ")";
     return out.str();
   }
-  out << std::showpos << offset_s * 1e3 << std::noshowpos << " ms (+- " << sigma_s * 1e3 << " ms, "
-      << inliers << " of " << observations << " fitted rotations)";
+  out << std::showpos << TenthsOfMs(offset_s) << std::noshowpos << " ms (+- " << sigma_s * 1e3
+      << " ms, " << inliers << " of " << observations << " fitted rotations)";
   return out.str();
 }
 
@@ -50,7 +60,7 @@ std::string TimeOffsetAdvice(const TimeOffsetEstimate& estimate, double applied_
   const double total = applied_shift_s + estimate.offset_s;
   std::ostringstream out;
   out << std::fixed << std::setprecision(1) << "the camera's and the IMU's clocks look "
-      << std::showpos << estimate.offset_s * 1e3 << std::noshowpos << " ms apart (+- "
+      << std::showpos << TenthsOfMs(estimate.offset_s) << std::noshowpos << " ms apart (+- "
       << estimate.sigma_s * 1e3 << ") beyond the timeshift_cam_imu applied (" << std::defaultfloat
       << std::setprecision(3) << applied_shift_s
       << " s): the IMU's rotation between frames is read that far off, which the search windows "

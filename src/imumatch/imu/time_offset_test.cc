@@ -139,6 +139,14 @@ TEST(TimeOffset, ConstantAngularVelocityShowsNoOffset) {
   EXPECT_FALSE(est.measured);
   EXPECT_NE(est.reason.find("do not vary enough"), std::string::npos) << est.reason;
   EXPECT_NE(est.Summary().find("not measured"), std::string::npos);
+  // A measured offset that rounds to zero reads +0.0, not -0.0.
+  TimeOffsetEstimate tiny;
+  tiny.measured = true;
+  tiny.offset_s = -3e-6;
+  tiny.sigma_s = 2e-4;
+  tiny.inliers = 51;
+  tiny.observations = 52;
+  EXPECT_EQ(tiny.Summary(), "+0.0 ms (+- 0.2 ms, 51 of 52 fitted rotations)");
 }
 
 // Rotations outside the log at some offset of the search are not used; too few left is said.
