@@ -234,6 +234,19 @@ ImuParams ImuNoiseFromYaml(const YAML::Node& node, const std::string& path,
   return params;
 }
 
+// Kalibr's timeshift_cam_imu (t_imu = t_cam + shift, seconds) when the node has it, else 0.
+double TimeshiftCamImu(const YAML::Node& node, const std::string& path) {
+  const YAML::Node shift = node["timeshift_cam_imu"];
+  if (!shift.IsDefined() || shift.IsNull()) return 0.0;
+  const double seconds = ScalarToDouble(shift, "timeshift_cam_imu", path);
+  if (std::abs(seconds) > 1.0) {
+    throw InputError(path, LineOf(shift),
+                     "timeshift_cam_imu is " + shift.Scalar() +
+                         " s: a camera-IMU time offset beyond 1 s is not a calibration");
+  }
+  return seconds;
+}
+
 }  // namespace
 
 EurocCameraSensor ReadEurocCameraSensor(const std::string& path) {
@@ -243,6 +256,8 @@ EurocCameraSensor ReadEurocCameraSensor(const std::string& path) {
   sensor.body_from_sensor = GetTransform(root, "T_BS", path);
   sensor.rate_hz = GetDouble(root, "rate_hz", path);
   if (sensor.rate_hz <= 0) throw InputError(path, LineOf(root["rate_hz"]), "rate_hz must be > 0");
+  // Not one of EuRoC's keys: a user's, as Kalibr names it (what eval and track advise to set).
+  sensor.timeshift_cam_imu_s = TimeshiftCamImu(root, path);
   return sensor;
 }
 
@@ -254,14 +269,7 @@ EurocCameraSensor ReadKalibrCamchain(const std::string& path, const std::string&
   sensor.camera = CameraFromYaml(node, path, "distortion_coeffs");
   // T_cam_imu takes IMU coordinates to the camera's; the body is the IMU.
   sensor.body_from_sensor = GetRowsTransform(node, "T_cam_imu", path).Inverse();
-  if (const YAML::Node shift = node["timeshift_cam_imu"]; shift.IsDefined() && !shift.IsNull()) {
-    sensor.timeshift_cam_imu_s = ScalarToDouble(shift, "timeshift_cam_imu", path);
-    if (std::abs(sensor.timeshift_cam_imu_s) > 1.0) {
-      throw InputError(path, LineOf(shift),
-                       "timeshift_cam_imu is " + shift.Scalar() +
-                           " s: a camera-IMU time offset beyond 1 s is not a calibration");
-    }
-  }
+  sensor.timeshift_cam_imu_s = TimeshiftCamImu(node, path);
   return sensor;
 }
 

@@ -50,8 +50,9 @@ struct EurocCameraSensor {
   PinholeCamera camera;  // intrinsics, resolution, distortion (k3 = 0 when only four given)
   Rigid3d body_from_sensor;
   double rate_hz = 0.0;  // 0 when the file does not say (Kalibr's camchain)
-  // Kalibr's timeshift_cam_imu (t_imu = t_cam + shift, seconds; at most 1 s); 0 when not given.
-  // LoadDataset moves the frames' timestamps by it.
+  // Kalibr's timeshift_cam_imu (t_imu = t_cam + shift, seconds; at most 1 s), from a camchain or
+  // from the same key added to a EuRoC cam0/sensor.yaml; 0 when not given. LoadDataset moves the
+  // frames' timestamps by it.
   double timeshift_cam_imu_s = 0.0;
 };
 struct EurocImuSensor {

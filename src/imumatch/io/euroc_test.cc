@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -606,6 +608,38 @@ TEST(Euroc, Mh05Cam0IsTheNamedEurocCamera) {
   EXPECT_DOUBLE_EQ(s.camera.cx, named.cx);
   EXPECT_DOUBLE_EQ(s.camera.cy, named.cy);
   for (size_t i = 0; i < 5; ++i) EXPECT_DOUBLE_EQ(s.camera.distortion[i], named.distortion[i]);
+  EXPECT_EQ(s.timeshift_cam_imu_s, 0.0);  // EuRoC's files have no such key
+}
+
+// The timeshift eval and track advise to set, written as Kalibr names it into a EuRoC
+// cam0/sensor.yaml: read, and the frames move into the IMU's clock by it (the loader says so,
+// naming the file); beyond a second it is refused naming the line.
+TEST(Euroc, ATimeshiftAddedToCam0SensorYamlMovesTheFrames) {
+  const std::string real = testing::DataPath("euroc_mh05_flight/mav0");
+  testing::TempDir dir;
+  std::filesystem::create_directories(dir.Path("mav0/cam0"));
+  std::filesystem::copy(real + "/imu0", dir.Path("mav0/imu0"),
+                        std::filesystem::copy_options::recursive);
+  std::filesystem::copy_file(real + "/cam0/data.csv", dir.Path("mav0/cam0/data.csv"));
+  std::filesystem::create_directory_symlink(real + "/cam0/data", dir.Path("mav0/cam0/data"));
+  std::ifstream in(real + "/cam0/sensor.yaml");
+  const std::string yaml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string sensor =
+      dir.Write("mav0/cam0/sensor.yaml", yaml + "\ntimeshift_cam_imu: 0.0102\n");
+  EXPECT_DOUBLE_EQ(ReadEurocCameraSensor(sensor).timeshift_cam_imu_s, 0.0102);
+  const Dataset recorded = LoadDataset(testing::DataPath("euroc_mh05_flight"));
+  const Dataset shifted = LoadDataset(dir.path());
+  ASSERT_EQ(shifted.frames.size(), recorded.frames.size());
+  EXPECT_EQ(shifted.timeshift_cam_imu_s, 0.0102);
+  EXPECT_EQ(shifted.frames[7].t_ns, recorded.frames[7].t_ns + 10'200'000);
+  bool said = false;
+  for (const std::string& w : shifted.warnings) {
+    said |= w.find("timeshift_cam_imu of " + sensor + " (0.0102 s)") != std::string::npos;
+  }
+  EXPECT_TRUE(said) << ::testing::PrintToString(shifted.warnings);
+  const std::string far = dir.Write("mav0/cam0/sensor.yaml", yaml + "\ntimeshift_cam_imu: 2\n");
+  const int line = static_cast<int>(std::count(yaml.begin(), yaml.end(), '\n')) + 2;
+  testing::ExpectInputError([&] { ReadEurocCameraSensor(far); }, far, line, "beyond 1 s");
 }
 
 }  // namespace
