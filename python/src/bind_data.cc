@@ -365,7 +365,8 @@ dict per case, detector and method (matches, correct, false, precision, recall, 
 times in ms, threshold_px). details=True returns {'rows', 'threshold', 'notes', 'warnings',
 'skipped', 'bf_correct_fate', 'time_offsets', ...}; time_offsets: with a recorded IMU, per case
 and detector, the camera's clock offset from the IMU's that the fitted rotations measure
-(t_imu = t_cam + offset_s: measured, offset_s, sigma_s, observations, inliers, reason);
+(t_imu = t_cam + offset_s: measured, offset_s, sigma_s (both None when not measured),
+observations, inliers, reason);
 bf_correct_fate: per prediction method, summed over the pairs, what it
 made of brute force's correct matches (kept, matched_wrong, not matched by reason) and the
 correct matches it gained where brute force had none.

@@ -197,6 +197,7 @@ an empty image, or a time not after the previous frame's.)")
         out["warnings"] = result.warnings;
         out["time_offset"] =
             result.time_offset ? py::object(TimeOffsetToDict(*result.time_offset)) : py::none();
+        out["imu_time_offset_s"] = result.imu_time_offset_s;
         out["fallbacks"] = result.FallbackCount();
         out["has_truth"] = result.has_truth;
         if (result.has_truth && result.rpe.pairs() > 0) {
@@ -228,7 +229,9 @@ the camera's clock, its offset estimated from the fits as the run goes (`--estim
 while the IMU initialises), velocity, precision per threshold and relative pose error to the
 previous frame when the dataset has ground truth], "notes", "warnings", "time_offset" (the
 camera's clock offset from the IMU's measured from the fitted rotations, t_imu = t_cam + offset:
-measured, offset_s, sigma_s, observations, inliers, reason; None with a simulated IMU),
+measured, offset_s, sigma_s (both None when not measured), observations, inliers, reason; None
+with a simulated IMU or when no fit measured a rotation), "imu_time_offset_s" (the offset the
+IMU was read at by the end, 0 unless estimate_time_offset),
 "fallbacks", "rpe" (RMSE and mean, None without ground truth), "wall_s"}. Raises InputError for a dataset without an IMU.)");
 }
 

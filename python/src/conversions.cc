@@ -203,8 +203,9 @@ ImuSample ImuSampleFromPython(int64_t t_ns, const py::handle& gyro, const py::ha
 py::dict TimeOffsetToDict(const TimeOffsetEstimate& estimate) {
   py::dict out;
   out["measured"] = estimate.measured;
-  out["offset_s"] = estimate.offset_s;
-  out["sigma_s"] = estimate.sigma_s;
+  // Not measured: no number to read (the grid's value would look exact).
+  out["offset_s"] = estimate.measured ? py::object(py::float_(estimate.offset_s)) : py::none();
+  out["sigma_s"] = estimate.measured ? py::object(py::float_(estimate.sigma_s)) : py::none();
   out["observations"] = estimate.observations;
   out["inliers"] = estimate.inliers;
   out["reason"] = estimate.reason;

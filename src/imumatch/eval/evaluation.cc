@@ -214,8 +214,8 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
   const bool learn_bias = options.motion_source == MotionSource::kImu && !dataset.imu.empty() &&
                           !dataset.imu_simulated && options.gyro_bias_from_matches;
   std::vector<std::optional<GyroBiasFilter>> bias_filters(options.detectors.size());
-  // The fit's rotation measurement is a second solve: only when a filter reads it.
-  // The fitted rotations also measure the offset between the camera's and the IMU's clocks.
+  // The fit's rotation measurement is a second solve: only when a filter or the estimate of the
+  // offset between the camera's and the IMU's clocks reads it (a recorded IMU).
   const bool measure_offset = !dataset.imu.empty() && !dataset.imu_simulated;
   std::vector<std::vector<RotationObservation>> fitted_rotations(options.detectors.size());
   EvaluationOptions run_options = options;
@@ -369,10 +369,9 @@ EvaluationResult EvaluateSource(const EvalSource& source, const std::vector<Fram
                                 fa.t_ns, fb.t_ns, &*bias_filter);
         }
         if (measure_offset && method == MatchMethod::kGuided) {
-          if (const std::optional<ImuRotationMeasurement> measured =
-                  ImuRotationFromFit(run.refit, dataset.cam_from_imu)) {
-            fitted_rotations[detector].push_back(
-                {fa.t_ns, fb.t_ns, measured->imu_a_from_imu_b, measured->covariance});
+          if (std::optional<RotationObservation> observed =
+                  RotationObservationFromFit(run.refit, dataset.cam_from_imu, fa.t_ns, fb.t_ns)) {
+            fitted_rotations[detector].push_back(*observed);
           }
         }
         run.residuals = judge.Judge(matches);

@@ -219,14 +219,16 @@ nlohmann::json ReportToJson(const EvaluationResult& result, const ReportContext&
   j["warnings"] = result.warnings;
   json offsets = json::array();  // the camera's clock offset from the IMU's, t_imu = t_cam + offset
   for (const EvaluationResult::TimeOffset& offset : result.time_offsets) {
-    offsets.push_back({{"case", offset.case_name},
-                       {"detector", ToString(offset.detector)},
-                       {"measured", offset.estimate.measured},
-                       {"offset_s", offset.estimate.offset_s},
-                       {"sigma_s", offset.estimate.sigma_s},
-                       {"observations", offset.estimate.observations},
-                       {"inliers", offset.estimate.inliers},
-                       {"reason", offset.estimate.reason}});
+    offsets.push_back(
+        {{"case", offset.case_name},
+         {"detector", ToString(offset.detector)},
+         {"measured", offset.estimate.measured},
+         // Not measured: null, not the grid's value with a zero sigma.
+         {"offset_s", offset.estimate.measured ? json(offset.estimate.offset_s) : json(nullptr)},
+         {"sigma_s", offset.estimate.measured ? json(offset.estimate.sigma_s) : json(nullptr)},
+         {"observations", offset.estimate.observations},
+         {"inliers", offset.estimate.inliers},
+         {"reason", offset.estimate.reason}});
   }
   j["time_offsets"] = offsets;
   json summary = json::array();

@@ -195,6 +195,16 @@ TEST(ReportTest, JsonRoundTrip) {
   EXPECT_DOUBLE_EQ(k["time_offsets"][0]["offset_s"].get<double>(), 0.0098);
   EXPECT_DOUBLE_EQ(k["time_offsets"][0]["sigma_s"].get<double>(), 2e-4);
   EXPECT_EQ(k["time_offsets"][0]["inliers"].get<int>(), 141);
+  // Not measured: no number that could be read as exact, the reason instead.
+  TimeOffsetEstimate unmeasured;
+  unmeasured.offset_s = 0.05;  // where a search's grid stopped
+  unmeasured.reason = "the cost falls towards the edge of the +-50 ms searched";
+  with_offset.time_offsets.push_back({"front,1m", DetectorKind::kSift, unmeasured});
+  const nlohmann::json u = ReportToJson(with_offset, ctx)["time_offsets"][1];
+  EXPECT_FALSE(u["measured"].get<bool>());
+  EXPECT_TRUE(u["offset_s"].is_null());
+  EXPECT_TRUE(u["sigma_s"].is_null());
+  EXPECT_EQ(u["reason"], unmeasured.reason);
 }
 
 TEST(ReportTest, WritesFilesAndPlots) {

@@ -40,7 +40,11 @@ TrackRunResult RunTrack(const EvalSource& source, const TrackRunOptions& options
   const auto wall0 = SteadyClock::now();
   TrackRunResult out;
   out.dataset_name = d.name;
-  FrontEnd fe(d.camera, d.imu_params, d.cam_from_imu, options.front_end);
+  FrontEndOptions front_end = options.front_end;
+  // A recorded IMU: every fitted rotation is kept, to measure the camera's clock offset over the
+  // run (a simulated IMU shares the frames' clock).
+  if (!d.imu_simulated) front_end.keep_fitted_rotations = true;
+  FrontEnd fe(d.camera, d.imu_params, d.cam_from_imu, front_end);
   const std::vector<ImuSample>& imu = d.imu.samples();
   size_t next_imu = 0;
   const size_t first = std::min(options.first_frame, d.frames.size());
@@ -160,15 +164,19 @@ TrackRunResult RunTrack(const EvalSource& source, const TrackRunOptions& options
         offset.Summary());
     out.imu_time_offset_s = NsToSeconds(fe.imu_time_offset_ns());
     if (const std::optional<TimeOffsetEstimate>& online = fe.online_time_offset(); online) {
-      std::ostringstream note;
-      note << "the IMU was read in the camera's clock, offset by the estimate of the last "
-           << online->observations << " fitted rotations: " << std::showpos << std::fixed
-           << std::setprecision(1) << NsToSeconds(fe.imu_time_offset_ns()) * 1e3 << std::noshowpos
-           << " ms at the end of the run (last estimate: " << online->Summary() << ")";
-      out.notes.push_back(note.str());
-    } else if (const std::string advice = TimeOffsetAdvice(offset, d.timeshift_cam_imu_s);
-               !advice.empty()) {
-      out.warnings.push_back(advice);
+      out.notes.push_back(
+          "the IMU was read in the camera's clock, offset by the online estimate of the last " +
+          std::to_string(online->observations) +
+          " fitted rotations: " + FormatOffsetMs(out.imu_time_offset_s) +
+          " in use at the end of the run (last estimate: " + online->Summary() + ")");
+    }
+    // Advice only when no online offset was in use (the batch estimate is then the whole
+    // correction): with one in use, the run already read the IMU where the fits put it.
+    if (fe.imu_time_offset_ns() == 0) {
+      if (const std::string advice = TimeOffsetAdvice(offset, d.timeshift_cam_imu_s);
+          !advice.empty()) {
+        out.warnings.push_back(advice);
+      }
     }
   }
   out.has_truth =

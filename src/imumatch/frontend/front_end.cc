@@ -34,6 +34,9 @@ void FrontEndOptions::Check() const {
   IMUMATCH_CHECK(time_offset_window >= time_offset.min_observations,
                  "time_offset_window=" << time_offset_window << " (at least "
                                        << time_offset.min_observations << ")");
+  IMUMATCH_CHECK(time_offset_every >= 1 && time_offset_every <= time_offset_window,
+                 "time_offset_every=" << time_offset_every << " (in [1, time_offset_window = "
+                                      << time_offset_window << "])");
   IMUMATCH_CHECK(std::isfinite(still_s) && still_s >= 0.0 && still_s <= 3600.0,
                  "still_s=" << still_s);
   IMUMATCH_CHECK(std::isfinite(unknown_velocity_sigma) && unknown_velocity_sigma > 0.0,
@@ -71,8 +74,9 @@ FrontEnd::FrontEnd(const PinholeCamera& camera, const ImuParams& imu_params,
   options.Check();
   velocity_sigma_ = options.unknown_velocity_sigma;
   // The fits' rotations are a second solve: only when something reads them.
-  if (options_.estimate_time_offset) options_.keep_fitted_rotations = true;
-  if (options_.keep_fitted_rotations) options_.refit.measure_rotation = true;
+  if (options_.keep_fitted_rotations || options_.estimate_time_offset) {
+    options_.refit.measure_rotation = true;
+  }
 }
 
 void FrontEnd::AddImu(const ImuSample& sample) { imu_.Push(sample, "front end IMU stream"); }
@@ -269,17 +273,21 @@ std::vector<Match> FrontEnd::MatchPass(const CameraMotion& motion, const Feature
 }
 
 void FrontEnd::UseFittedRotation(const MotionRefit& refit, int64_t t_a_ns, int64_t t_b_ns) {
-  if (options_.keep_fitted_rotations) {
-    if (const std::optional<ImuRotationMeasurement> measured =
-            ImuRotationFromFit(refit, cam_from_imu_)) {
-      fitted_rotations_.push_back(
-          {t_a_ns, t_b_ns, measured->imu_a_from_imu_b, measured->covariance});
+  const size_t window = static_cast<size_t>(options_.time_offset_window);
+  if (options_.keep_fitted_rotations || options_.estimate_time_offset) {
+    if (std::optional<RotationObservation> observed =
+            RotationObservationFromFit(refit, cam_from_imu_, t_a_ns, t_b_ns)) {
+      fitted_rotations_.push_back(*observed);
+      ++rotations_seen_;
+      if (!options_.keep_fitted_rotations && fitted_rotations_.size() > window) {
+        fitted_rotations_.erase(fitted_rotations_.begin());  // a live feed keeps its window only
+      }
     }
   }
-  if (options_.estimate_time_offset && fitted_rotations_.size() >= rotations_at_estimate_ + 10 &&
+  if (options_.estimate_time_offset &&
+      rotations_seen_ >= rotations_at_estimate_ + static_cast<size_t>(options_.time_offset_every) &&
       static_cast<int>(fitted_rotations_.size()) >= options_.time_offset.min_observations) {
-    rotations_at_estimate_ = fitted_rotations_.size();
-    const size_t window = static_cast<size_t>(options_.time_offset_window);
+    rotations_at_estimate_ = rotations_seen_;
     const std::vector<RotationObservation> recent(
         fitted_rotations_.end() -
             static_cast<std::ptrdiff_t>(std::min(window, fitted_rotations_.size())),

@@ -78,18 +78,22 @@ struct FrontEndOptions {
   bool learn_gyro_bias = true;
   bool learn_gyro_bias_after_still = false;
   GyroBiasFilterOptions gyro_bias_filter;
-  // Keep the rotations the second pass's fits measure (fitted_rotations()), for
-  // EstimateTimeOffset: the camera's clock offset from the IMU's, measured over a run.
-  bool keep_fitted_rotations = true;
+  // Keep every rotation the second pass's fits measure (fitted_rotations(), one per frame: for a
+  // run of known length), for EstimateTimeOffset: the camera's clock offset from the IMU's,
+  // measured over a run (RunTrack turns it on for a recorded IMU). Each fit then solves a second
+  // time for the rotation its matches alone show. Off, a live front end keeps only the last
+  // time_offset_window of them, and only when estimate_time_offset.
+  bool keep_fitted_rotations = false;
   // Estimate that offset as the run goes and read the IMU in the camera's clock: over
   // [t_a + offset, t_b + offset] for frames stamped t_a, t_b (a camera not triggered by the IMU's
   // clock, whose timeshift is not calibrated). EstimateTimeOffset runs over the last
-  // time_offset_window fitted rotations each time 10 more have come, and a measured offset
-  // replaces the one in use. The IMU must then be fed up to the frame's time plus
+  // time_offset_window fitted rotations each time time_offset_every more have come, and a measured
+  // offset replaces the one in use. The IMU must then be fed up to the frame's time plus
   // time_offset.max_offset_s. Off: the IMU is read at the frames' stamps.
   bool estimate_time_offset = false;
   TimeOffsetOptions time_offset;
   int time_offset_window = 100;
+  int time_offset_every = 10;  // fitted rotations between two online estimates
   // Velocity uncertainty (m/s per axis) when nothing constrains it: after a loss or an IMU gap.
   double unknown_velocity_sigma = 1.0;
   double min_velocity_sigma = 0.02;
@@ -173,7 +177,8 @@ class FrontEnd {
   // and the estimate it came from.
   int64_t imu_time_offset_ns() const { return imu_offset_ns_; }
   const std::optional<TimeOffsetEstimate>& online_time_offset() const { return online_offset_; }
-  // The rotations the second pass's fits measured (keep_fitted_rotations), in frame order.
+  // The rotations the second pass's fits measured, in frame order: all of them with
+  // keep_fitted_rotations, else the last time_offset_window with estimate_time_offset, else none.
   const std::vector<RotationObservation>& fitted_rotations() const { return fitted_rotations_; }
 
  private:
@@ -224,7 +229,7 @@ class FrontEnd {
   std::optional<GyroBiasFilter> gyro_bias_filter_;
   std::vector<RotationObservation> fitted_rotations_;
   int64_t imu_offset_ns_ = 0;
-  size_t rotations_at_estimate_ = 0;
+  size_t rotations_seen_ = 0, rotations_at_estimate_ = 0;
   std::optional<TimeOffsetEstimate> online_offset_;
 };
 

@@ -13,6 +13,7 @@
 #include "imumatch/imu/gyro_bias_filter.h"
 #include "imumatch/imu/imu_buffer.h"
 #include "imumatch/imu/imu_params.h"
+#include "imumatch/imu/time_offset.h"
 #include "imumatch/matching/depth_edges.h"
 #include "imumatch/matching/match_types.h"
 #include "imumatch/matching/predictor.h"
@@ -106,6 +107,14 @@ struct ImuRotationMeasurement {
 };
 std::optional<ImuRotationMeasurement> ImuRotationFromFit(const MotionRefit& refit,
                                                          const Rigid3d& cam_from_imu);
+
+// The same as an observation of the camera's clock offset (EstimateTimeOffset) between the
+// frames' camera times t_a_ns < t_b_ns; nullopt when there is no measured rotation or its
+// covariance is not finite and positive definite (a degenerate fit: left out rather than let it
+// make the whole estimate fail).
+std::optional<RotationObservation> RotationObservationFromFit(const MotionRefit& refit,
+                                                              const Rigid3d& cam_from_imu,
+                                                              int64_t t_a_ns, int64_t t_b_ns);
 
 // Feeds the rotation refit measured between t_a_ns and t_b_ns (ImuRotationFromFit) to filter,
 // with the IMU samples of that interval. Returns false when there was nothing to feed (no

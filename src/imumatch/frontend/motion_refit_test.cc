@@ -467,6 +467,36 @@ TEST(MotionRefitTest, ImuRotationFromFitTakesOutThePriorsRotation) {
   // No fit, no measurement.
   MotionRefit failed;
   EXPECT_FALSE(ImuRotationFromFit(failed, cam_from_imu).has_value());
+  EXPECT_FALSE(RotationObservationFromFit(failed, cam_from_imu, 0, 50'000'000).has_value());
+}
+
+// A fit's rotation as an observation of the camera's clock offset: the measurement between the
+// given camera times; left out when its covariance is not positive definite (a degenerate fit)
+// or the times are not in order, so one such fit cannot fail a whole estimate.
+TEST(MotionRefitTest, RotationObservationFromFitLeavesOutDegenerateFits) {
+  const Rigid3d cam_from_imu(Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY())),
+                             Eigen::Vector3d(0.02, 0.0, -0.01));
+  MotionRefit fit;
+  fit.ok = true;
+  fit.rotation_from_matches_ok = true;
+  fit.rotation_from_matches = Eigen::Quaterniond(Eigen::AngleAxisd(0.01, Eigen::Vector3d::UnitZ()));
+  fit.rotation_from_matches_covariance = Eigen::Matrix3d::Identity() * 1e-8;
+  const std::optional<RotationObservation> o =
+      RotationObservationFromFit(fit, cam_from_imu, 100, 50'000'100);
+  ASSERT_TRUE(o.has_value());
+  EXPECT_EQ(o->t_a_ns, 100);
+  EXPECT_EQ(o->t_b_ns, 50'000'100);
+  const std::optional<ImuRotationMeasurement> m = ImuRotationFromFit(fit, cam_from_imu);
+  ASSERT_TRUE(m.has_value());
+  EXPECT_LT(LogSO3(o->imu_a_from_imu_b.conjugate() * m->imu_a_from_imu_b).norm(), 1e-15);
+  EXPECT_LT((o->covariance - m->covariance).norm(), 1e-20);
+  EXPECT_FALSE(RotationObservationFromFit(fit, cam_from_imu, 100, 100).has_value());
+  MotionRefit singular = fit;
+  singular.rotation_from_matches_covariance(2, 2) = 0.0;  // an axis the matches did not see
+  EXPECT_FALSE(RotationObservationFromFit(singular, cam_from_imu, 100, 50'000'100).has_value());
+  MotionRefit not_finite = fit;
+  not_finite.rotation_from_matches_covariance(0, 1) = std::nan("");
+  EXPECT_FALSE(RotationObservationFromFit(not_finite, cam_from_imu, 100, 50'000'100).has_value());
 }
 
 // The take-off of EuRoC MH_05 in miniature: the scene's readings far away (8-12 m, where a 2.4 cm

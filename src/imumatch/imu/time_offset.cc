@@ -20,12 +20,19 @@ void TimeOffsetOptions::Check() const {
                  "TimeOffsetOptions.max_offset_s must be in (0, 1] s, got " << max_offset_s);
   IMUMATCH_CHECK(std::isfinite(step_s) && step_s > 0.0 && step_s * 4.0 <= max_offset_s,
                  "TimeOffsetOptions.step_s must be in (0, max_offset_s / 4], got " << step_s);
+  // Every grid point integrates the gyro over every observation: bounded work.
+  IMUMATCH_CHECK(max_offset_s / step_s <= kMaxTimeOffsetSteps,
+                 "TimeOffsetOptions: max_offset_s / step_s must be at most "
+                     << kMaxTimeOffsetSteps << " grid steps each side, got "
+                     << max_offset_s / step_s);
   IMUMATCH_CHECK(std::isfinite(gate_chi2) && gate_chi2 > 0.0,
                  "TimeOffsetOptions.gate_chi2 must be > 0, got " << gate_chi2);
   IMUMATCH_CHECK(std::isfinite(scale_sigma) && scale_sigma >= 0.0,
                  "TimeOffsetOptions.scale_sigma must be >= 0, got " << scale_sigma);
-  IMUMATCH_CHECK(min_observations >= 2,
-                 "TimeOffsetOptions.min_observations must be >= 2, got " << min_observations);
+  IMUMATCH_CHECK(min_observations >= 4,
+                 "TimeOffsetOptions.min_observations must be >= 4 (the offset and a 3-axis bias "
+                 "correction are solved), got "
+                     << min_observations);
   IMUMATCH_CHECK(std::isfinite(max_sigma_s) && max_sigma_s > 0.0,
                  "TimeOffsetOptions.max_sigma_s must be > 0, got " << max_sigma_s);
 }
@@ -38,34 +45,62 @@ double TenthsOfMs(double seconds) {
   return tenths == 0.0 ? 0.0 : tenths / 10.0;
 }
 
-}  // namespace
-
-std::string TimeOffsetEstimate::Summary() const {
+// A sigma in milliseconds: one decimal, "< 0.1" below what one decimal shows.
+std::string SigmaMs(double seconds) {
   std::ostringstream out;
-  out << std::fixed << std::setprecision(1);
-  if (!measured) {
-    out << "not measured (" << reason << ")";
-    return out.str();
+  if (seconds < 0.5e-4) {
+    out << "< 0.1";
+  } else {
+    out << std::fixed << std::setprecision(1) << seconds * 1e3;
   }
-  out << std::showpos << TenthsOfMs(offset_s) << std::noshowpos << " ms (+- " << sigma_s * 1e3
-      << " ms, " << inliers << " of " << observations << " fitted rotations)";
   return out.str();
 }
 
-std::string TimeOffsetAdvice(const TimeOffsetEstimate& estimate, double applied_shift_s) {
-  if (!estimate.measured || std::fabs(estimate.offset_s) < 0.002 ||
-      std::fabs(estimate.offset_s) <= 3.0 * estimate.sigma_s) {
+// Seconds to the 0.1 ms the estimate resolves, without a sign for zero: "0.0102", "-0.004".
+std::string ShiftSeconds(double seconds) {
+  double rounded = std::round(seconds * 1e4) / 1e4;
+  if (rounded == 0.0) rounded = 0.0;  // not "-0"
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(4) << rounded;
+  std::string s = out.str();
+  while (s.back() == '0') s.pop_back();
+  if (s.back() == '.') s.push_back('0');
+  return s;
+}
+
+}  // namespace
+
+std::string FormatOffsetMs(double seconds) {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(1) << std::showpos << TenthsOfMs(seconds) << " ms";
+  return out.str();
+}
+
+std::string TimeOffsetEstimate::Summary() const {
+  if (!measured) return "not measured (" + reason + ")";
+  std::ostringstream out;
+  out << FormatOffsetMs(offset_s) << " (+- " << SigmaMs(sigma_s) << " ms, " << inliers << " of "
+      << observations << " fitted rotations)";
+  return out.str();
+}
+
+std::string TimeOffsetAdvice(const TimeOffsetEstimate& estimate, double applied_shift_s,
+                             const TimeOffsetAdviceOptions& options) {
+  if (!estimate.measured || std::fabs(estimate.offset_s) < options.min_offset_s ||
+      std::fabs(estimate.offset_s) <= options.min_sigmas * estimate.sigma_s) {
     return {};
   }
-  const double total = applied_shift_s + estimate.offset_s;
+  const std::string total = ShiftSeconds(applied_shift_s + estimate.offset_s);
   std::ostringstream out;
-  out << std::fixed << std::setprecision(1) << "the camera's and the IMU's clocks look "
-      << std::showpos << TenthsOfMs(estimate.offset_s) << std::noshowpos << " ms apart (+- "
-      << estimate.sigma_s * 1e3 << ") beyond the timeshift_cam_imu applied (" << std::defaultfloat
-      << std::setprecision(3) << applied_shift_s
+  out << "the camera's and the IMU's clocks look " << FormatOffsetMs(estimate.offset_s)
+      << " apart (+- " << SigmaMs(estimate.sigma_s) << " ms) beyond the timeshift_cam_imu applied ("
+      << ShiftSeconds(applied_shift_s)
       << " s): the IMU's rotation between frames is read that far off, which the search windows "
          "absorb at the cost of their size; set timeshift_cam_imu to "
-      << total << " s (cam0/sensor.yaml, or --timeshift-cam-imu " << total << ")";
+      << total
+      << " s (the key timeshift_cam_imu in cam0/sensor.yaml or Kalibr's camchain.yaml, or "
+         "--timeshift-cam-imu "
+      << total << ")";
   return out.str();
 }
 
@@ -221,6 +256,18 @@ TimeOffsetEstimate EstimateTimeOffset(const ImuBuffer& imu, const ImuParams& par
   est.gyro_bias_correction = at.db;
   const double h = NsToSeconds(step_ns);
   est.offset_s = (best - steps) * h;
+  // The cost is a chi-square: an offset is told apart from another when the cost differs by 1 (one
+  // sigma of one parameter). A cost that stays within 1 over the whole grid shows none, wherever
+  // its minimum falls (on exact data the rounding decides it).
+  double highest = at.cost;
+  for (const GridCost& g : grid) highest = std::max(highest, g.cost);
+  if (!(highest - at.cost >= 1.0)) {
+    est.reason =
+        "the fitted rotations do not vary enough to show an offset (the cost changes by "
+        "less than 1 over the +-" +
+        std::to_string(static_cast<int>(std::lround(options.max_offset_s * 1e3))) + " ms searched)";
+    return est;
+  }
   if (best == 0 || best == 2 * steps) {
     est.reason = "the cost falls towards the edge of the +-" +
                  std::to_string(static_cast<int>(std::lround(options.max_offset_s * 1e3))) +
@@ -239,7 +286,9 @@ TimeOffsetEstimate EstimateTimeOffset(const ImuBuffer& imu, const ImuParams& par
   est.sigma_s = std::sqrt(2.0 / second);
   if (est.sigma_s > options.max_sigma_s) {
     std::ostringstream why;
-    why << std::fixed << std::setprecision(1) << "sigma " << est.sigma_s * 1e3
+    why << std::fixed << std::setprecision(1) << "sigma "
+        << (est.sigma_s > options.max_offset_s ? "beyond the +-" : "")
+        << std::min(est.sigma_s, options.max_offset_s) * 1e3
         << " ms: the fitted rotations do not vary enough to show an offset";
     est.reason = why.str();
     return est;

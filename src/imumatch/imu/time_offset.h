@@ -37,12 +37,15 @@ namespace imumatch {
 // optimistically: the covariances are scaled by the observations' scatter at a first search's
 // offset (their median normalised squared residual against a chi-square's, robust to the
 // outliers) and the search runs again with them.
+// The most grid steps on each side of zero that TimeOffsetOptions may ask for.
+constexpr double kMaxTimeOffsetSteps = 10000.0;
+
 struct TimeOffsetOptions {
   double max_offset_s = 0.05;  // the grid spans [-max, max]
-  double step_s = 0.0005;
-  double gate_chi2 = 16.27;   // 3 dof, probability 0.999
-  double scale_sigma = 0.01;  // as GyroBiasFilterOptions::scale_sigma
-  int min_observations = 10;
+  double step_s = 0.0005;      // at most max_offset_s / 4 and at least max_offset_s / 10000
+  double gate_chi2 = 16.27;    // 3 dof, probability 0.999
+  double scale_sigma = 0.01;   // as GyroBiasFilterOptions::scale_sigma
+  int min_observations = 10;   // at least 4: the offset and a 3-axis bias correction
   // The offset counts as measured when its sigma is at most this (else the rotations did not
   // vary enough to show it).
   double max_sigma_s = 0.005;
@@ -68,17 +71,33 @@ struct TimeOffsetEstimate {
   int inliers = 0;            // within the gate at the offset
   double cost_at_zero = 0.0;  // truncated cost at offset 0 and at offset_s
   double cost = 0.0;
-  // "+9.8 ms (+- 0.4 ms, 183 of 190 fitted rotations)" or the reason, for reports.
+  // "+9.8 ms (+- 0.4 ms, 183 of 190 fitted rotations)" or the reason, for reports. offset_s and
+  // sigma_s mean nothing when !measured (reports write them as null).
   std::string Summary() const;
 };
 
-// When the estimate says the clocks are worth aligning (measured, at least 2 ms and beyond 3
-// sigmas): advice to set timeshift_cam_imu to applied_shift_s + the offset, with why; else empty.
-std::string TimeOffsetAdvice(const TimeOffsetEstimate& estimate, double applied_shift_s);
+// An offset as reports print it: milliseconds to one decimal with their sign, "+9.8 ms"; "+0.0 ms"
+// for what rounds to zero (not "-0.0").
+std::string FormatOffsetMs(double seconds);
+
+// When an estimate is worth acting on: it is measured, at least min_offset_s away from zero (a
+// few milliseconds move a rotation between frames by less than the keypoints' noise) and farther
+// than min_sigmas of its sigma.
+struct TimeOffsetAdviceOptions {
+  double min_offset_s = 0.002;
+  double min_sigmas = 3.0;
+};
+// Advice to set timeshift_cam_imu to applied_shift_s + the offset (seconds to 0.1 ms), with why,
+// when the estimate is worth acting on (TimeOffsetAdviceOptions); else empty.
+std::string TimeOffsetAdvice(const TimeOffsetEstimate& estimate, double applied_shift_s,
+                             const TimeOffsetAdviceOptions& options = {});
 
 // Throws InvalidArgument for invalid options or observations (t_b <= t_a, a covariance that is not
 // finite and symmetric positive definite, a quaternion that is not unit); observations whose
-// shifted intervals leave the log or cross a gap at some offset of the grid are not used.
+// shifted intervals leave the log or cross a gap at some offset of the grid are not used. Not
+// measured (with the reason) when fewer than min_observations are usable, when the cost changes
+// by less than 1 over the whole grid, when its minimum lies at the grid's edge, or when the sigma
+// exceeds max_sigma_s.
 // TryEstimateTimeOffset: the same, an error turned into an estimate not measured, with the
 // error as its reason (for reports that must not stop on it).
 TimeOffsetEstimate TryEstimateTimeOffset(const ImuBuffer& imu, const ImuParams& params,

@@ -192,6 +192,88 @@ TEST(TimeOffset, RefusesInvalidObservationsAndOptions) {
   bad = TimeOffsetOptions();
   bad.max_offset_s = std::nan("");
   EXPECT_THROW(EstimateTimeOffset(s.buffer, s.params, kBias, good, bad), InvalidArgument);
+  // A grid of 10^9 steps (1 ns over +-1 s) is refused before any work, not left to exhaust memory.
+  bad = TimeOffsetOptions();
+  bad.max_offset_s = 1.0;
+  bad.step_s = 1e-9;
+  try {
+    EstimateTimeOffset(s.buffer, s.params, kBias, good, bad);
+    ADD_FAILURE() << "a 10^9-step grid was taken";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("at most 10000 grid steps"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(TryEstimateTimeOffset(s.buffer, s.params, kBias, good, bad).measured);
+  bad = TimeOffsetOptions();
+  bad.min_observations = 3;  // fewer than the four unknowns
+  EXPECT_THROW(EstimateTimeOffset(s.buffer, s.params, kBias, good, bad), InvalidArgument);
+}
+
+// An offset beyond the range searched: the cost falls towards the grid's edge, and the estimate
+// says so instead of giving the edge as the offset.
+TEST(TimeOffset, AnOffsetBeyondTheSearchSaysSo) {
+  const Shake s(kBias);
+  std::mt19937_64 rng(8);
+  TimeOffsetOptions options;
+  options.max_offset_s = 0.02;
+  const TimeOffsetEstimate est =
+      EstimateTimeOffset(s.buffer, s.params, kBias, s.Observe(0.035, 120, 2e-4, rng), options);
+  EXPECT_FALSE(est.measured);
+  EXPECT_NE(est.reason.find("towards the edge of the +-20 ms searched"), std::string::npos)
+      << est.reason;
+  // The searched range widened to hold it: found.
+  options.max_offset_s = 0.05;
+  std::mt19937_64 rng2(8);
+  const TimeOffsetEstimate wide =
+      EstimateTimeOffset(s.buffer, s.params, kBias, s.Observe(0.035, 120, 2e-4, rng2), options);
+  ASSERT_TRUE(wide.measured) << wide.reason;
+  EXPECT_NEAR(wide.offset_s, 0.035, std::max(3.0 * wide.sigma_s, 5e-4));
+}
+
+// The advice, hand-checked: given only for a measured offset of at least 2 ms beyond 3 sigmas,
+// with the total to set (the shift applied plus the offset, seconds to 0.1 ms), both places to set
+// it and the units.
+TEST(TimeOffset, AdvisesTheTotalShiftOnlyWhenItIsWorthSetting) {
+  TimeOffsetEstimate est;
+  est.measured = true;
+  est.offset_s = 0.0098;
+  est.sigma_s = 0.0002;
+  est.inliers = 183;
+  est.observations = 190;
+  const std::string advice = TimeOffsetAdvice(est, 0.0004);
+  EXPECT_NE(advice.find("look +9.8 ms apart (+- 0.2 ms) beyond the timeshift_cam_imu applied "
+                        "(0.0004 s)"),
+            std::string::npos)
+      << advice;
+  EXPECT_NE(advice.find("set timeshift_cam_imu to 0.0102 s"), std::string::npos) << advice;
+  EXPECT_NE(advice.find("cam0/sensor.yaml or Kalibr's camchain.yaml, or --timeshift-cam-imu "
+                        "0.0102)"),
+            std::string::npos)
+      << advice;
+  // What cancels the shift applied reads 0, not -0 or 1e-18.
+  EXPECT_NE(TimeOffsetAdvice(est, -0.0098).find("set timeshift_cam_imu to 0.0 s"),
+            std::string::npos);
+  // Not worth it: under 2 ms, within 3 sigmas, or not measured.
+  est.offset_s = 0.0019;
+  est.sigma_s = 1e-5;
+  EXPECT_EQ(TimeOffsetAdvice(est, 0.0), "");
+  est.offset_s = -0.006;
+  est.sigma_s = 0.0021;  // 2.86 sigmas
+  EXPECT_EQ(TimeOffsetAdvice(est, 0.0), "");
+  est.sigma_s = 0.0019;  // 3.16 sigmas
+  EXPECT_NE(TimeOffsetAdvice(est, 0.0).find("look -6.0 ms apart (+- 1.9 ms)"), std::string::npos);
+  TimeOffsetAdviceOptions strict;
+  strict.min_sigmas = 5.0;
+  EXPECT_EQ(TimeOffsetAdvice(est, 0.0, strict), "");
+  est.measured = false;
+  EXPECT_EQ(TimeOffsetAdvice(est, 0.0), "");
+  // A sigma below what one decimal shows reads "< 0.1", not "0.0".
+  est.measured = true;
+  est.offset_s = 0.0123;
+  est.sigma_s = 2e-5;
+  EXPECT_EQ(est.Summary(), "+12.3 ms (+- < 0.1 ms, 183 of 190 fitted rotations)");
+  EXPECT_EQ(FormatOffsetMs(-0.00004), "+0.0 ms");
+  EXPECT_EQ(FormatOffsetMs(-0.0123), "-12.3 ms");
 }
 
 }  // namespace
