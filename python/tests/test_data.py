@@ -199,6 +199,17 @@ def test_track_measures_the_cameras_clock_offset_on_the_real_flight():
     assert t["observations"] >= 30 and 0 < t["sigma_s"] < 0.001
     assert abs(t["offset_s"]) < max(3 * t["sigma_s"], 0.0015)
     assert not any("clocks look" in w for w in out["warnings"])
+    assert out["imu_time_offset_s"] == 0.0  # no online estimate asked for: read at the stamps
+
+
+def test_an_offset_not_measured_has_no_number():
+    # 8 frames give fewer fitted rotations than the estimate needs: not measured, and no
+    # offset or sigma that could be read as exact.
+    out = imumatch.track(os.path.join(data_dir(), "euroc_mh05_flight"), max_frames=8)
+    t = out["time_offset"]
+    assert t is not None and not t["measured"]
+    assert t["offset_s"] is None and t["sigma_s"] is None
+    assert "needed" in t["reason"], t["reason"]
 
 
 def test_the_front_end_tracks_a_synthetic_walk_without_ground_truth():
