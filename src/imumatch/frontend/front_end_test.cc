@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <iostream>
 #include <vector>
 
@@ -102,6 +103,42 @@ TEST(FrontEnd, RunFromRestRecoversTheVelocity) {
     }
   }
   EXPECT_TRUE(checked);
+}
+
+// A live front end keeps no fitted rotations by default (nothing reads them); estimating the
+// camera's clock offset online, it keeps the last time_offset_window of them only, estimates every
+// time_offset_every, and on a synthetic walk (one clock for camera and IMU) finds no offset.
+TEST(FrontEnd, OnlineTimeOffsetKeepsItsWindowAndFindsNoOffsetOnOneClock) {
+  const SyntheticSequence& seq = Walk();
+  {
+    Runner run(seq, Options());
+    for (size_t k = 0; k < seq.frames.size(); ++k) run.Next(k);
+    EXPECT_TRUE(run.front_end().fitted_rotations().empty());
+    EXPECT_FALSE(run.front_end().online_time_offset().has_value());
+  }
+  FrontEndOptions o = Options();
+  o.estimate_time_offset = true;
+  o.time_offset_window = 10;
+  o.time_offset_every = 3;
+  Runner run(seq, o);
+  size_t most = 0;
+  int guided = 0;
+  for (size_t k = 0; k < seq.frames.size(); ++k) {
+    guided += run.Next(k).status == FrameStatus::kGuided ? 1 : 0;
+    most = std::max(most, run.front_end().fitted_rotations().size());
+  }
+  EXPECT_GE(guided, 14);  // more fits than the window holds
+  EXPECT_EQ(most, 10u);
+  const std::optional<TimeOffsetEstimate>& online = run.front_end().online_time_offset();
+  ASSERT_TRUE(online.has_value());
+  EXPECT_GE(online->observations, 1);
+  EXPECT_LE(online->observations, 10);
+  if (online->measured) {
+    EXPECT_NEAR(online->offset_s, 0.0, std::max(3.0 * online->sigma_s, 1e-3)) << online->Summary();
+  }
+  EXPECT_LE(std::llabs(run.front_end().imu_time_offset_ns()), 1'000'000);
+  o.time_offset_every = 11;  // more than the window
+  EXPECT_THROW(o.Check(), InvalidArgument);
 }
 
 // Without depth nothing corrects the velocity: an accelerometer bias error, constant, makes its
