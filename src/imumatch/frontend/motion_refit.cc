@@ -512,16 +512,12 @@ std::optional<ImuRotationMeasurement> ImuRotationFromFit(const MotionRefit& refi
 std::optional<RotationObservation> RotationObservationFromFit(const MotionRefit& refit,
                                                               const Rigid3d& cam_from_imu,
                                                               int64_t t_a_ns, int64_t t_b_ns) {
-  if (!(t_b_ns > t_a_ns)) return std::nullopt;
   const std::optional<ImuRotationMeasurement> measured = ImuRotationFromFit(refit, cam_from_imu);
-  if (!measured || !measured->covariance.allFinite() ||
-      !measured->imu_a_from_imu_b.coeffs().allFinite()) {
-    return std::nullopt;
-  }
-  if (Eigen::LLT<Eigen::Matrix3d>(measured->covariance).info() != Eigen::Success) {
-    return std::nullopt;
-  }
-  return RotationObservation{t_a_ns, t_b_ns, measured->imu_a_from_imu_b, measured->covariance};
+  if (!measured) return std::nullopt;
+  RotationObservation observed{t_a_ns, t_b_ns, measured->imu_a_from_imu_b, measured->covariance};
+  // What EstimateTimeOffset would refuse is left out here.
+  if (!RotationObservationProblem(observed).empty()) return std::nullopt;
+  return observed;
 }
 
 bool UpdateGyroBiasFromFit(const MotionRefit& refit, const Rigid3d& cam_from_imu,

@@ -183,6 +183,24 @@ GridCost CostOf(const std::vector<Eigen::Vector3d>& r, const std::vector<Usable>
 
 }  // namespace
 
+std::string RotationObservationProblem(const RotationObservation& o) {
+  if (!(o.t_b_ns > o.t_a_ns)) {
+    return "t_b " + std::to_string(o.t_b_ns) + " ns is not after t_a " + std::to_string(o.t_a_ns) +
+           " ns";
+  }
+  if (!o.covariance.allFinite() || !o.covariance.isApprox(o.covariance.transpose(), 1e-9)) {
+    return "covariance not finite and symmetric";
+  }
+  if (!std::isfinite(o.imu_a_from_imu_b.norm()) ||
+      !(std::fabs(o.imu_a_from_imu_b.norm() - 1.0) < 1e-6)) {
+    return "not a unit quaternion";
+  }
+  if (Eigen::LLT<Eigen::Matrix3d>(o.covariance).info() != Eigen::Success) {
+    return "covariance not positive definite";
+  }
+  return {};
+}
+
 TimeOffsetEstimate EstimateTimeOffset(const ImuBuffer& imu, const ImuParams& params,
                                       const Eigen::Vector3d& gyro_bias,
                                       const std::vector<RotationObservation>& observations,
@@ -194,18 +212,8 @@ TimeOffsetEstimate EstimateTimeOffset(const ImuBuffer& imu, const ImuParams& par
   std::vector<Usable> usable;
   for (size_t i = 0; i < observations.size(); ++i) {
     const RotationObservation& o = observations[i];
-    IMUMATCH_CHECK(o.t_b_ns > o.t_a_ns, "rotation observation " << i << ": t_b " << o.t_b_ns
-                                                                << " ns is not after t_a "
-                                                                << o.t_a_ns << " ns");
-    IMUMATCH_CHECK(
-        o.covariance.allFinite() && o.covariance.isApprox(o.covariance.transpose(), 1e-9),
-        "rotation observation " << i << ": covariance not finite and symmetric");
-    IMUMATCH_CHECK(std::isfinite(o.imu_a_from_imu_b.norm()) &&
-                       std::fabs(o.imu_a_from_imu_b.norm() - 1.0) < 1e-6,
-                   "rotation observation " << i << ": not a unit quaternion");
-    const Eigen::LLT<Eigen::Matrix3d> llt(o.covariance);
-    IMUMATCH_CHECK(llt.info() == Eigen::Success,
-                   "rotation observation " << i << ": covariance not positive definite");
+    const std::string problem = RotationObservationProblem(o);
+    IMUMATCH_REQUIRE(problem.empty(), "rotation observation " << i << ": " << problem);
     std::vector<ImuSample> samples;
     try {
       // Covered, without a gap, at every offset of the grid.
@@ -256,6 +264,9 @@ TimeOffsetEstimate EstimateTimeOffset(const ImuBuffer& imu, const ImuParams& par
   est.gyro_bias_correction = at.db;
   const double h = NsToSeconds(step_ns);
   est.offset_s = (best - steps) * h;
+  const std::string searched =
+      "+-" + std::to_string(static_cast<int>(std::lround(options.max_offset_s * 1e3))) +
+      " ms searched";
   // The cost is a chi-square: an offset is told apart from another when the cost differs by 1 (one
   // sigma of one parameter). A cost that stays within 1 over the whole grid shows none, wherever
   // its minimum falls (on exact data the rounding decides it).
@@ -264,14 +275,12 @@ TimeOffsetEstimate EstimateTimeOffset(const ImuBuffer& imu, const ImuParams& par
   if (!(highest - at.cost >= 1.0)) {
     est.reason =
         "the fitted rotations do not vary enough to show an offset (the cost changes by "
-        "less than 1 over the +-" +
-        std::to_string(static_cast<int>(std::lround(options.max_offset_s * 1e3))) + " ms searched)";
+        "less than 1 over the " +
+        searched + ")";
     return est;
   }
   if (best == 0 || best == 2 * steps) {
-    est.reason = "the cost falls towards the edge of the +-" +
-                 std::to_string(static_cast<int>(std::lround(options.max_offset_s * 1e3))) +
-                 " ms searched";
+    est.reason = "the cost falls towards the edge of the " + searched;
     return est;
   }
   const double cm = grid[static_cast<size_t>(best - 1)].cost, c0 = at.cost,

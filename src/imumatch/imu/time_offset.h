@@ -92,6 +92,10 @@ struct TimeOffsetAdviceOptions {
 std::string TimeOffsetAdvice(const TimeOffsetEstimate& estimate, double applied_shift_s,
                              const TimeOffsetAdviceOptions& options = {});
 
+// Why an observation cannot be used: t_b not after t_a, a covariance that is not finite, symmetric
+// and positive definite, or a quaternion that is not unit; empty when it can.
+std::string RotationObservationProblem(const RotationObservation& observation);
+
 // Throws InvalidArgument for invalid options or observations (t_b <= t_a, a covariance that is not
 // finite and symmetric positive definite, a quaternion that is not unit); observations whose
 // shifted intervals leave the log or cross a gap at some offset of the grid are not used. Not
