@@ -206,6 +206,9 @@ py::dict TimeOffsetToDict(const TimeOffsetEstimate& estimate) {
   // Not measured: no number to read (the grid's value would look exact).
   out["offset_s"] = estimate.measured ? py::object(py::float_(estimate.offset_s)) : py::none();
   out["sigma_s"] = estimate.measured ? py::object(py::float_(estimate.sigma_s)) : py::none();
+  out["jackknife_sigma_s"] = estimate.measured && estimate.jackknife_sigma_s > 0.0
+                                 ? py::object(py::float_(estimate.jackknife_sigma_s))
+                                 : py::none();
   out["observations"] = estimate.observations;
   out["inliers"] = estimate.inliers;
   out["reason"] = estimate.reason;

@@ -197,6 +197,8 @@ def test_track_measures_the_cameras_clock_offset_on_the_real_flight():
     t = out["time_offset"]
     assert t["measured"], t["reason"]
     assert t["observations"] >= 30 and 0 < t["sigma_s"] < 0.001
+    # The sigma is the larger of the parabola's and the block jackknife's (10 runs of the fits).
+    assert 0 < t["jackknife_sigma_s"] <= t["sigma_s"]
     assert abs(t["offset_s"]) < max(3 * t["sigma_s"], 0.0015)
     assert not any("clocks look" in w for w in out["warnings"])
     assert out["imu_time_offset_s"] == 0.0  # no online estimate asked for: read at the stamps
@@ -208,7 +210,7 @@ def test_an_offset_not_measured_has_no_number():
     out = imumatch.track(os.path.join(data_dir(), "euroc_mh05_flight"), max_frames=8)
     t = out["time_offset"]
     assert t is not None and not t["measured"]
-    assert t["offset_s"] is None and t["sigma_s"] is None
+    assert t["offset_s"] is None and t["sigma_s"] is None and t["jackknife_sigma_s"] is None
     assert "needed" in t["reason"], t["reason"]
 
 

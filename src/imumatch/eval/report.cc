@@ -226,6 +226,10 @@ nlohmann::json ReportToJson(const EvaluationResult& result, const ReportContext&
          // Not measured: null, not the grid's value with a zero sigma.
          {"offset_s", offset.estimate.measured ? json(offset.estimate.offset_s) : json(nullptr)},
          {"sigma_s", offset.estimate.measured ? json(offset.estimate.sigma_s) : json(nullptr)},
+         // The block jackknife's part of it (sigma_s is the larger of it and the parabola's).
+         {"jackknife_sigma_s", offset.estimate.measured && offset.estimate.jackknife_sigma_s > 0.0
+                                   ? json(offset.estimate.jackknife_sigma_s)
+                                   : json(nullptr)},
          {"observations", offset.estimate.observations},
          {"inliers", offset.estimate.inliers},
          {"reason", offset.estimate.reason}});

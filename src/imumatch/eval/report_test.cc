@@ -184,6 +184,7 @@ TEST(ReportTest, JsonRoundTrip) {
   est.measured = true;
   est.offset_s = 0.0098;
   est.sigma_s = 2e-4;
+  est.jackknife_sigma_s = 1.5e-4;
   est.observations = 149;
   est.inliers = 141;
   with_offset.time_offsets.push_back({"front,1m", DetectorKind::kOrb, est});
@@ -194,6 +195,7 @@ TEST(ReportTest, JsonRoundTrip) {
   EXPECT_TRUE(k["time_offsets"][0]["measured"].get<bool>());
   EXPECT_DOUBLE_EQ(k["time_offsets"][0]["offset_s"].get<double>(), 0.0098);
   EXPECT_DOUBLE_EQ(k["time_offsets"][0]["sigma_s"].get<double>(), 2e-4);
+  EXPECT_DOUBLE_EQ(k["time_offsets"][0]["jackknife_sigma_s"].get<double>(), 1.5e-4);
   EXPECT_EQ(k["time_offsets"][0]["inliers"].get<int>(), 141);
   // Not measured: no number that could be read as exact, the reason instead.
   TimeOffsetEstimate unmeasured;
@@ -204,6 +206,7 @@ TEST(ReportTest, JsonRoundTrip) {
   EXPECT_FALSE(u["measured"].get<bool>());
   EXPECT_TRUE(u["offset_s"].is_null());
   EXPECT_TRUE(u["sigma_s"].is_null());
+  EXPECT_TRUE(u["jackknife_sigma_s"].is_null());
   EXPECT_EQ(u["reason"], unmeasured.reason);
 }
 

@@ -35,6 +35,9 @@ void TimeOffsetOptions::Check() const {
                      << min_observations);
   IMUMATCH_CHECK(std::isfinite(max_sigma_s) && max_sigma_s > 0.0,
                  "TimeOffsetOptions.max_sigma_s must be > 0, got " << max_sigma_s);
+  IMUMATCH_CHECK(jackknife_blocks == 0 || (jackknife_blocks >= 2 && jackknife_blocks <= 1000),
+                 "TimeOffsetOptions.jackknife_blocks must be 0 (off) or in [2, 1000], got "
+                     << jackknife_blocks);
 }
 
 namespace {
@@ -145,14 +148,15 @@ std::vector<Eigen::Vector3d> ResidualsAt(const ImuBuffer& imu, const Eigen::Vect
 }
 
 // The truncated cost of one offset's residuals, each normalised by its covariance times scale2,
-// with the bias correction solved on the inliers.
+// with the bias correction solved on the inliers; of the observations whose keep is 1.
 GridCost CostOf(const std::vector<Eigen::Vector3d>& r, const std::vector<Usable>& usable,
-                double scale2, double gate) {
+                double scale2, double gate, const std::vector<char>& keep) {
   const size_t n = usable.size();
   // A bias error db turns the gyro's rotation by about -dt db: r_i + dt_i db is what is left.
   GridCost out;
-  std::vector<char> inlier(n, 1);
-  std::vector<double> c(n);
+  std::vector<char> inlier(keep);
+  std::vector<double> c;
+  c.reserve(n);
   for (int iteration = 0; iteration < 4; ++iteration) {
     Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
     Eigen::Vector3d g = Eigen::Vector3d::Zero();
@@ -165,20 +169,53 @@ GridCost CostOf(const std::vector<Eigen::Vector3d>& r, const std::vector<Usable>
     GridCost next;
     next.db = lu.isInvertible() ? Eigen::Vector3d(-lu.solve(g)) : out.db;
     next.cost = 0.0;
+    c.clear();
     for (size_t i = 0; i < n; ++i) {
+      if (!keep[i]) continue;
       const Eigen::Vector3d e = r[i] + usable[i].dt * next.db;
-      c[i] = e.dot(usable[i].weight * e) / scale2;
-      inlier[i] = c[i] <= gate;
+      const double ci = e.dot(usable[i].weight * e) / scale2;
+      c.push_back(ci);
+      inlier[i] = ci <= gate;
       next.inliers += inlier[i];
-      next.cost += std::min(c[i], gate);
+      next.cost += std::min(ci, gate);
     }
-    const auto mid = c.begin() + static_cast<std::ptrdiff_t>(n / 2);
+    const auto mid = c.begin() + static_cast<std::ptrdiff_t>(c.size() / 2);
     std::nth_element(c.begin(), mid, c.end());
     next.median = *mid;
     if (iteration > 0 && !(next.cost < out.cost)) break;
     out = next;
   }
   return out;
+}
+
+// The grid's costs for the observations kept, and their lowest point.
+struct GridCosts {
+  std::vector<GridCost> cost;
+  size_t best = 0;
+};
+GridCosts CostsOverGrid(const std::vector<std::vector<Eigen::Vector3d>>& residuals,
+                        const std::vector<Usable>& usable, double scale2, double gate,
+                        const std::vector<char>& keep) {
+  GridCosts out;
+  out.cost.resize(residuals.size());
+  out.best = residuals.size() / 2;  // offset 0 wins ties
+  for (size_t k = 0; k < residuals.size(); ++k) {
+    out.cost[k] = CostOf(residuals[k], usable, scale2, gate, keep);
+    if (out.cost[k].cost < out.cost[out.best].cost) out.best = k;
+  }
+  return out;
+}
+
+// The minimum's offset from the grid's lowest point by the parabola through it and its
+// neighbours (in steps), and the cost's second derivative (per step^2); false at the grid's edge
+// or where the cost is not convex there.
+bool ParabolaAtMinimum(const GridCosts& g, double* shift_steps, double* second) {
+  if (g.best == 0 || g.best + 1 == g.cost.size()) return false;
+  const double cm = g.cost[g.best - 1].cost, c0 = g.cost[g.best].cost, cp = g.cost[g.best + 1].cost;
+  *second = cm + cp - 2.0 * c0;
+  if (!(*second > 0.0)) return false;
+  *shift_steps = 0.5 * (cm - cp) / *second;
+  return true;
 }
 
 }  // namespace
@@ -246,19 +283,16 @@ TimeOffsetEstimate EstimateTimeOffset(const ImuBuffer& imu, const ImuParams& par
   // stated covariances, the observations' scatter there (the median normalised squared residual
   // against a chi-square's with 3 dof, 2.366: robust to the fits that locked onto something else)
   // scales them, and the search runs again. The sigma then reflects the scatter.
-  std::vector<GridCost> grid(residuals.size());
+  const std::vector<char> all(usable.size(), 1);
+  GridCosts grid;
   double scale2 = 1.0;
-  int best = steps;
   for (int round = 0; round < 2; ++round) {
-    best = steps;
-    for (size_t k = 0; k < residuals.size(); ++k) {
-      grid[k] = CostOf(residuals[k], usable, scale2, options.gate_chi2);
-      if (grid[k].cost < grid[static_cast<size_t>(best)].cost) best = static_cast<int>(k);
-    }
-    scale2 *= std::max(1.0, grid[static_cast<size_t>(best)].median / 2.366);
+    grid = CostsOverGrid(residuals, usable, scale2, options.gate_chi2, all);
+    scale2 *= std::max(1.0, grid.cost[grid.best].median / 2.366);
   }
-  est.cost_at_zero = grid[static_cast<size_t>(steps)].cost;
-  const GridCost& at = grid[static_cast<size_t>(best)];
+  const int best = static_cast<int>(grid.best);
+  est.cost_at_zero = grid.cost[static_cast<size_t>(steps)].cost;
+  const GridCost& at = grid.cost[grid.best];
   est.cost = at.cost;
   est.inliers = at.inliers;
   est.gyro_bias_correction = at.db;
@@ -271,7 +305,7 @@ TimeOffsetEstimate EstimateTimeOffset(const ImuBuffer& imu, const ImuParams& par
   // sigma of one parameter). A cost that stays within 1 over the whole grid shows none, wherever
   // its minimum falls (on exact data the rounding decides it).
   double highest = at.cost;
-  for (const GridCost& g : grid) highest = std::max(highest, g.cost);
+  for (const GridCost& g : grid.cost) highest = std::max(highest, g.cost);
   if (!(highest - at.cost >= 1.0)) {
     est.reason =
         "the fitted rotations do not vary enough to show an offset (the cost changes by "
@@ -283,16 +317,43 @@ TimeOffsetEstimate EstimateTimeOffset(const ImuBuffer& imu, const ImuParams& par
     est.reason = "the cost falls towards the edge of the " + searched;
     return est;
   }
-  const double cm = grid[static_cast<size_t>(best - 1)].cost, c0 = at.cost,
-               cp = grid[static_cast<size_t>(best + 1)].cost;
-  const double second = (cm + cp - 2.0 * c0) / (h * h);  // d^2 cost / d offset^2
-  if (!(second > 0.0)) {
+  double shift = 0.0, second = 0.0;
+  if (!ParabolaAtMinimum(grid, &shift, &second)) {
     est.reason = "the fitted rotations do not vary enough to show an offset";
     return est;
   }
-  est.offset_s += 0.5 * h * (cm - cp) / (cm + cp - 2.0 * c0);
+  est.offset_s += shift * h;
   // The cost is a chi-square: it rises by 1 at one sigma of one parameter.
-  est.sigma_s = std::sqrt(2.0 / second);
+  est.sigma_s = std::sqrt(2.0 / second) * h;
+  // That sigma takes the observations as independent, and consecutive pairs' fits are not (they
+  // share a frame, and a scene's errors last over many frames). The block jackknife does not
+  // assume it: the estimate again without each of jackknife_blocks runs of consecutive
+  // observations, whose spread (times (B - 1) / B) is the estimate's variance. The larger of the
+  // two sigmas stands.
+  const size_t n = usable.size();
+  const size_t blocks = std::min<size_t>(static_cast<size_t>(options.jackknife_blocks), n / 2);
+  if (blocks >= 2) {
+    std::vector<double> leave_out;
+    for (size_t b = 0; b < blocks; ++b) {
+      std::vector<char> keep(all);
+      for (size_t i = b * n / blocks; i < (b + 1) * n / blocks; ++i) keep[i] = 0;
+      const GridCosts g = CostsOverGrid(residuals, usable, scale2, options.gate_chi2, keep);
+      double s_b = 0.0, second_b = 0.0;
+      if (!ParabolaAtMinimum(g, &s_b, &second_b)) {
+        est.reason = "the minimum moves to the edge of the " + searched + " without one of the " +
+                     std::to_string(blocks) + " runs of consecutive fitted rotations";
+        return est;
+      }
+      leave_out.push_back((static_cast<double>(g.best) - steps + s_b) * h);
+    }
+    double mean = 0.0;
+    for (const double o : leave_out) mean += o / static_cast<double>(blocks);
+    double spread = 0.0;
+    for (const double o : leave_out) spread += (o - mean) * (o - mean);
+    est.jackknife_sigma_s =
+        std::sqrt(spread * static_cast<double>(blocks - 1) / static_cast<double>(blocks));
+    est.sigma_s = std::max(est.sigma_s, est.jackknife_sigma_s);
+  }
   if (est.sigma_s > options.max_sigma_s) {
     std::ostringstream why;
     why << std::fixed << std::setprecision(1) << "sigma "

@@ -36,7 +36,11 @@ namespace imumatch {
 // (one parameter: the cost rises by 1 at 1 sigma). Real fits state their covariance
 // optimistically: the covariances are scaled by the observations' scatter at a first search's
 // offset (their median normalised squared residual against a chi-square's, robust to the
-// outliers) and the search runs again with them.
+// outliers) and the search runs again with them. That sigma still takes the fits as independent;
+// consecutive pairs' fits are not (they share a frame, and a scene's errors last over many
+// frames), so a block jackknife measures it as well: the offset found again without each of
+// jackknife_blocks runs of consecutive observations (in the order given), their spread giving the
+// estimate's variance. The larger sigma stands.
 // The most grid steps on each side of zero that TimeOffsetOptions may ask for.
 constexpr double kMaxTimeOffsetSteps = 10000.0;
 
@@ -49,6 +53,9 @@ struct TimeOffsetOptions {
   // The offset counts as measured when its sigma is at most this (else the rotations did not
   // vary enough to show it).
   double max_sigma_s = 0.005;
+  // Runs of consecutive observations the jackknife leaves out in turn (at most half the
+  // observations); 0: the parabola's sigma alone.
+  int jackknife_blocks = 10;
   void Check() const;  // throws InvalidArgument
 };
 
@@ -62,10 +69,11 @@ struct RotationObservation {
 };
 
 struct TimeOffsetEstimate {
-  bool measured = false;  // sigma_s <= max_sigma_s with enough observations
-  std::string reason;     // why not measured
-  double offset_s = 0.0;  // t_imu = t_cam + offset_s
-  double sigma_s = 0.0;
+  bool measured = false;           // sigma_s <= max_sigma_s with enough observations
+  std::string reason;              // why not measured
+  double offset_s = 0.0;           // t_imu = t_cam + offset_s
+  double sigma_s = 0.0;            // the larger of the parabola's and the jackknife's
+  double jackknife_sigma_s = 0.0;  // 0 when not computed
   Eigen::Vector3d gyro_bias_correction = Eigen::Vector3d::Zero();  // db at the offset (rad/s)
   int observations = 0;       // usable: their intervals lie in the log at every offset of the grid
   int inliers = 0;            // within the gate at the offset
@@ -100,8 +108,8 @@ std::string RotationObservationProblem(const RotationObservation& observation);
 // finite and symmetric positive definite, a quaternion that is not unit); observations whose
 // shifted intervals leave the log or cross a gap at some offset of the grid are not used. Not
 // measured (with the reason) when fewer than min_observations are usable, when the cost changes
-// by less than 1 over the whole grid, when its minimum lies at the grid's edge, or when the sigma
-// exceeds max_sigma_s.
+// by less than 1 over the whole grid, when its minimum lies at the grid's edge (also with a run of
+// the observations left out), or when the sigma exceeds max_sigma_s.
 // TryEstimateTimeOffset: the same, an error turned into an estimate not measured, with the
 // error as its reason (for reports that must not stop on it).
 TimeOffsetEstimate TryEstimateTimeOffset(const ImuBuffer& imu, const ImuParams& params,
