@@ -338,10 +338,14 @@ TimeOffsetEstimate EstimateTimeOffset(const ImuBuffer& imu, const ImuParams& par
       std::vector<char> keep(all);
       for (size_t i = b * n / blocks; i < (b + 1) * n / blocks; ++i) keep[i] = 0;
       const GridCosts g = CostsOverGrid(residuals, usable, scale2, options.gate_chi2, keep);
-      double s_b = 0.0, second_b = 0.0;
-      if (!ParabolaAtMinimum(g, &s_b, &second_b)) {
-        est.reason = "the minimum moves to the edge of the " + searched + " without one of the " +
-                     std::to_string(blocks) + " runs of consecutive fitted rotations";
+      double s_b = 0.0, second_b = 0.0, highest_b = g.cost[g.best].cost;
+      for (const GridCost& c : g.cost) highest_b = std::max(highest_b, c.cost);
+      // As for all of them: a cost that changes by less than 1 shows no offset.
+      if (!(highest_b - g.cost[g.best].cost >= 1.0) || !ParabolaAtMinimum(g, &s_b, &second_b)) {
+        est.reason = "the offset is not shown without one of the " + std::to_string(blocks) +
+                     " runs of consecutive fitted rotations (the cost is flat, or its minimum at "
+                     "the edge of the " +
+                     searched + ")";
         return est;
       }
       leave_out.push_back((static_cast<double>(g.best) - steps + s_b) * h);

@@ -162,6 +162,56 @@ TEST(TimeOffset, TheJackknifeSigmaCoversErrorsSharedByConsecutiveFits) {
   EXPECT_LT(ratio_independent, 1.5);
 }
 
+// Where the angular velocity varies during one run of the fits only, that run alone shows the
+// offset: the curvature gives a sigma, but without that run nothing is measured, so the jackknife
+// does not call the offset measured (the curvature alone does).
+TEST(TimeOffset, AnOffsetShownByOneRunOfFitsAloneIsNotMeasured) {
+  ImuParams params = ImuParams::EurocAdis16448();
+  ImuBuffer buffer;
+  const Eigen::Vector3d w0(0.1, -0.3, 0.5);
+  auto w = [&](double t) {
+    // One period of a 0.3 s wiggle, 0.3 rad/s about x, from 2.1 s; constant elsewhere. Only the
+    // fits 30-39 (the fourth run of ten) read it at some offset of the +-50 ms searched.
+    if (t < 2.1 || t > 2.4) return w0;
+    return Eigen::Vector3d(w0 +
+                           Eigen::Vector3d(0.3, 0, 0) * std::sin(2.0 * M_PI * (t - 2.1) / 0.3));
+  };
+  for (int64_t k = 0; k <= 1600; ++k) {
+    ImuSample sample;
+    sample.t_ns = k * 5'000'000;
+    sample.gyro_rad_s = w(NsToSeconds(sample.t_ns));
+    sample.accel_m_s2 = Eigen::Vector3d(0.0, 0.0, 9.81);
+    buffer.Push(sample);
+  }
+  const double offset = 0.01;
+  std::vector<RotationObservation> obs;
+  for (int k = 0; k < 100; ++k) {
+    RotationObservation o;
+    o.t_a_ns = SecondsToNs(0.5 + 0.05 * k);
+    o.t_b_ns = o.t_a_ns + SecondsToNs(0.05);
+    // The rotation over the shifted interval, by the midpoint rule on 1 ms steps.
+    Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
+    for (int j = 0; j < 50; ++j) {
+      const double t = NsToSeconds(o.t_a_ns) + offset + 0.001 * (j + 0.5);
+      q = (q * ExpSO3(w(t) * 0.001)).normalized();
+    }
+    o.imu_a_from_imu_b = q;
+    o.covariance = Eigen::Matrix3d::Identity() * 4e-8;
+    obs.push_back(o);
+  }
+  TimeOffsetOptions curvature_only;
+  curvature_only.jackknife_blocks = 0;
+  const TimeOffsetEstimate one =
+      EstimateTimeOffset(buffer, params, Eigen::Vector3d::Zero(), obs, curvature_only);
+  ASSERT_TRUE(one.measured) << one.reason;
+  EXPECT_NEAR(one.offset_s, offset, 1e-3);
+  const TimeOffsetEstimate est = EstimateTimeOffset(buffer, params, Eigen::Vector3d::Zero(), obs);
+  EXPECT_FALSE(est.measured);
+  EXPECT_NE(est.reason.find("not shown without one of the 10 runs of consecutive fitted rotations"),
+            std::string::npos)
+      << est.reason;
+}
+
 // Turning at a constant rate, every offset gives the same rotations: nothing is measured, and the
 // report says why instead of giving a number.
 TEST(TimeOffset, ConstantAngularVelocityShowsNoOffset) {
