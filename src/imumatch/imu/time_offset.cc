@@ -35,6 +35,8 @@ void TimeOffsetOptions::Check() const {
                      << min_observations);
   IMUMATCH_CHECK(std::isfinite(max_sigma_s) && max_sigma_s > 0.0,
                  "TimeOffsetOptions.max_sigma_s must be > 0, got " << max_sigma_s);
+  IMUMATCH_CHECK(std::isfinite(ambiguity_chi2) && ambiguity_chi2 >= 0.0,
+                 "TimeOffsetOptions.ambiguity_chi2 must be >= 0, got " << ambiguity_chi2);
   IMUMATCH_CHECK(jackknife_blocks == 0 || (jackknife_blocks >= 2 && jackknife_blocks <= 1000),
                  "TimeOffsetOptions.jackknife_blocks must be 0 (off) or in [2, 1000], got "
                      << jackknife_blocks);
@@ -325,6 +327,26 @@ TimeOffsetEstimate EstimateTimeOffset(const ImuBuffer& imu, const ImuParams& par
   est.offset_s += shift * h;
   // The cost is a chi-square: it rises by 1 at one sigma of one parameter.
   est.sigma_s = std::sqrt(2.0 / second) * h;
+  // A second minimum nearly as low as the lowest, away from it (beyond 3 sigmas and a grid step;
+  // the grid's ends count when the cost falls towards them): a periodic motion (a vibration, a
+  // gait) repeats its rotations at a shift of its period, and the lowest point is then one of
+  // several that the fits cannot tell apart.
+  for (size_t k = 0; k < grid.cost.size(); ++k) {
+    const double c = grid.cost[k].cost;
+    const bool local_minimum = (k == 0 || c <= grid.cost[k - 1].cost) &&
+                               (k + 1 == grid.cost.size() || c <= grid.cost[k + 1].cost);
+    const double at_s = (static_cast<double>(k) - steps) * h;
+    if (!local_minimum || std::fabs(at_s - est.offset_s) <= 3.0 * est.sigma_s + h) continue;
+    if (c - at.cost < options.ambiguity_chi2) {
+      std::ostringstream why;
+      why << std::fixed << std::setprecision(1) << "ambiguous: a second minimum of the cost at "
+          << FormatOffsetMs(at_s) << ", within " << c - at.cost << " of the lowest's at "
+          << FormatOffsetMs(est.offset_s)
+          << " (a periodic motion repeats its rotations at a shift of its period)";
+      est.reason = why.str();
+      return est;
+    }
+  }
   // That sigma takes the observations as independent, and consecutive pairs' fits are not (they
   // share a frame, and a scene's errors last over many frames). The block jackknife does not
   // assume it: the estimate again without each of jackknife_blocks runs of consecutive

@@ -53,6 +53,9 @@ struct TimeOffsetOptions {
   // The offset counts as measured when its sigma is at most this (else the rotations did not
   // vary enough to show it).
   double max_sigma_s = 0.005;
+  // Not measured when a second minimum of the cost, beyond 3 sigmas of the lowest, lies within
+  // this of it (a chi-square difference: 4 is two sigmas of one parameter); 0: never.
+  double ambiguity_chi2 = 4.0;
   // Runs of consecutive observations the jackknife leaves out in turn (at most half the
   // observations); 0: the parabola's sigma alone.
   int jackknife_blocks = 10;
@@ -109,7 +112,8 @@ std::string RotationObservationProblem(const RotationObservation& observation);
 // shifted intervals leave the log or cross a gap at some offset of the grid are not used. Not
 // measured (with the reason) when fewer than min_observations are usable, when the cost changes
 // by less than 1 over the whole grid, when its minimum lies at the grid's edge (also with a run of
-// the observations left out), or when the sigma exceeds max_sigma_s.
+// the observations left out), when a second minimum is nearly as low (ambiguity_chi2), or when
+// the sigma exceeds max_sigma_s.
 // TryEstimateTimeOffset: the same, an error turned into an estimate not measured, with the
 // error as its reason (for reports that must not stop on it).
 TimeOffsetEstimate TryEstimateTimeOffset(const ImuBuffer& imu, const ImuParams& params,

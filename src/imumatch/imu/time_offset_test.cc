@@ -212,6 +212,68 @@ TEST(TimeOffset, AnOffsetShownByOneRunOfFitsAloneIsNotMeasured) {
       << est.reason;
 }
 
+// A vibration of period 35 ms repeats the rotations at every shift of 35 ms: the fits taken 10
+// ms off fit -25 and +45 ms as well, and the estimate says it cannot tell them apart instead of
+// picking one. The same fits without the vibration's repeats (a second, slower component) are
+// measured.
+TEST(TimeOffset, APeriodicMotionIsAmbiguous) {
+  ImuParams params = ImuParams::EurocAdis16448();
+  const Eigen::Vector3d w0(0.1, -0.3, 0.5);
+  auto observe = [&](const auto& w, ImuBuffer* buffer) {
+    for (int64_t k = 0; k <= 1600; ++k) {
+      ImuSample sample;
+      sample.t_ns = k * 1'000'000;  // 1 kHz: the vibration sampled 35 times a period
+      sample.gyro_rad_s = w(NsToSeconds(sample.t_ns));
+      sample.accel_m_s2 = Eigen::Vector3d(0.0, 0.0, 9.81);
+      buffer->Push(sample);
+    }
+    std::vector<RotationObservation> obs;
+    for (int k = 0; k < 20; ++k) {
+      RotationObservation o;
+      o.t_a_ns = SecondsToNs(0.1 + 0.05 * k);
+      o.t_b_ns = o.t_a_ns + SecondsToNs(0.05);
+      Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
+      for (int j = 0; j < 500; ++j) {  // the rotation over the shifted interval, 0.1 ms steps
+        const double t = NsToSeconds(o.t_a_ns) + 0.010 + 1e-4 * (j + 0.5);
+        q = (q * ExpSO3(w(t) * 1e-4)).normalized();
+      }
+      o.imu_a_from_imu_b = q;
+      o.covariance = Eigen::Matrix3d::Identity() * 1e-8;
+      obs.push_back(o);
+    }
+    return obs;
+  };
+  auto vibration = [&](double t) {
+    return Eigen::Vector3d(w0 + Eigen::Vector3d(0.0, 0.2, 0.0) * std::sin(2.0 * M_PI * t / 0.035));
+  };
+  ImuBuffer periodic;
+  const std::vector<RotationObservation> obs = observe(vibration, &periodic);
+  const TimeOffsetEstimate est = EstimateTimeOffset(periodic, params, Eigen::Vector3d::Zero(), obs);
+  EXPECT_FALSE(est.measured);
+  EXPECT_NE(est.reason.find("ambiguous: a second minimum of the cost at"), std::string::npos)
+      << est.reason;
+  TimeOffsetOptions no_check;
+  no_check.ambiguity_chi2 = 0.0;
+  no_check.jackknife_blocks = 0;
+  const TimeOffsetEstimate picked =
+      EstimateTimeOffset(periodic, params, Eigen::Vector3d::Zero(), obs, no_check);
+  ASSERT_TRUE(picked.measured) << picked.reason;
+  // One of the repeats, to the grid's resolution.
+  const double folded = std::remainder(picked.offset_s - 0.010, 0.035);
+  EXPECT_NEAR(folded, 0.0, 1e-3) << picked.offset_s;
+  // A slow turn added to the vibration does not repeat: one minimum, at the offset.
+  auto vibration_and_turn = [&](double t) {
+    return Eigen::Vector3d(vibration(t) +
+                           Eigen::Vector3d(0.3 * std::sin(2.0 * M_PI * t / 0.7), 0.0, 0.0));
+  };
+  ImuBuffer aperiodic;
+  const std::vector<RotationObservation> obs2 = observe(vibration_and_turn, &aperiodic);
+  const TimeOffsetEstimate one =
+      EstimateTimeOffset(aperiodic, params, Eigen::Vector3d::Zero(), obs2);
+  ASSERT_TRUE(one.measured) << one.reason;
+  EXPECT_NEAR(one.offset_s, 0.010, std::max(3.0 * one.sigma_s, 5e-4));
+}
+
 // Turning at a constant rate, every offset gives the same rotations: nothing is measured, and the
 // report says why instead of giving a number.
 TEST(TimeOffset, ConstantAngularVelocityShowsNoOffset) {
