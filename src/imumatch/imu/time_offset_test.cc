@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <random>
 #include <vector>
 
@@ -162,12 +163,48 @@ TEST(TimeOffset, TheJackknifeSigmaCoversErrorsSharedByConsecutiveFits) {
   EXPECT_LT(ratio_independent, 1.5);
 }
 
+// A gyro log drawn from an angular velocity w(t): count samples, sample_ns apart, from 0.
+using AngularVelocity = std::function<Eigen::Vector3d(double)>;
+ImuBuffer GyroLog(const AngularVelocity& w, int64_t sample_ns, int64_t count) {
+  ImuBuffer buffer;
+  for (int64_t k = 0; k < count; ++k) {
+    ImuSample sample;
+    sample.t_ns = k * sample_ns;
+    sample.gyro_rad_s = w(NsToSeconds(sample.t_ns));
+    sample.accel_m_s2 = Eigen::Vector3d(0.0, 0.0, 9.81);
+    buffer.Push(sample);
+  }
+  return buffer;
+}
+
+// The rotations a camera whose clock runs offset_s behind the IMU's measures between n frames
+// 50 ms apart from camera time t0_s, with the given variance per axis: w integrated over the
+// shifted intervals by the midpoint rule on steps of step_s (from w itself, not the samples).
+std::vector<RotationObservation> RotationsSeen(const AngularVelocity& w, double offset_s,
+                                               double t0_s, int n, double variance, double step_s) {
+  std::vector<RotationObservation> obs;
+  const int steps = static_cast<int>(std::lround(0.05 / step_s));
+  for (int k = 0; k < n; ++k) {
+    RotationObservation o;
+    o.t_a_ns = SecondsToNs(t0_s + 0.05 * k);
+    o.t_b_ns = o.t_a_ns + SecondsToNs(0.05);
+    Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
+    for (int j = 0; j < steps; ++j) {
+      const double t = NsToSeconds(o.t_a_ns) + offset_s + step_s * (j + 0.5);
+      q = (q * ExpSO3(w(t) * step_s)).normalized();
+    }
+    o.imu_a_from_imu_b = q;
+    o.covariance = Eigen::Matrix3d::Identity() * variance;
+    obs.push_back(o);
+  }
+  return obs;
+}
+
 // Where the angular velocity varies during one run of the fits only, that run alone shows the
 // offset: the curvature gives a sigma, but without that run nothing is measured, so the jackknife
 // does not call the offset measured (the curvature alone does).
 TEST(TimeOffset, AnOffsetShownByOneRunOfFitsAloneIsNotMeasured) {
   ImuParams params = ImuParams::EurocAdis16448();
-  ImuBuffer buffer;
   const Eigen::Vector3d w0(0.1, -0.3, 0.5);
   auto w = [&](double t) {
     // One period of a 0.3 s wiggle, 0.3 rad/s about x, from 2.1 s; constant elsewhere. Only the
@@ -176,29 +213,9 @@ TEST(TimeOffset, AnOffsetShownByOneRunOfFitsAloneIsNotMeasured) {
     return Eigen::Vector3d(w0 +
                            Eigen::Vector3d(0.3, 0, 0) * std::sin(2.0 * M_PI * (t - 2.1) / 0.3));
   };
-  for (int64_t k = 0; k <= 1600; ++k) {
-    ImuSample sample;
-    sample.t_ns = k * 5'000'000;
-    sample.gyro_rad_s = w(NsToSeconds(sample.t_ns));
-    sample.accel_m_s2 = Eigen::Vector3d(0.0, 0.0, 9.81);
-    buffer.Push(sample);
-  }
+  const ImuBuffer buffer = GyroLog(w, 5'000'000, 1601);
   const double offset = 0.01;
-  std::vector<RotationObservation> obs;
-  for (int k = 0; k < 100; ++k) {
-    RotationObservation o;
-    o.t_a_ns = SecondsToNs(0.5 + 0.05 * k);
-    o.t_b_ns = o.t_a_ns + SecondsToNs(0.05);
-    // The rotation over the shifted interval, by the midpoint rule on 1 ms steps.
-    Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
-    for (int j = 0; j < 50; ++j) {
-      const double t = NsToSeconds(o.t_a_ns) + offset + 0.001 * (j + 0.5);
-      q = (q * ExpSO3(w(t) * 0.001)).normalized();
-    }
-    o.imu_a_from_imu_b = q;
-    o.covariance = Eigen::Matrix3d::Identity() * 4e-8;
-    obs.push_back(o);
-  }
+  const std::vector<RotationObservation> obs = RotationsSeen(w, offset, 0.5, 100, 4e-8, 0.001);
   TimeOffsetOptions curvature_only;
   curvature_only.jackknife_blocks = 0;
   const TimeOffsetEstimate one =
@@ -219,35 +236,12 @@ TEST(TimeOffset, AnOffsetShownByOneRunOfFitsAloneIsNotMeasured) {
 TEST(TimeOffset, APeriodicMotionIsAmbiguous) {
   ImuParams params = ImuParams::EurocAdis16448();
   const Eigen::Vector3d w0(0.1, -0.3, 0.5);
-  auto observe = [&](const auto& w, ImuBuffer* buffer) {
-    for (int64_t k = 0; k <= 1600; ++k) {
-      ImuSample sample;
-      sample.t_ns = k * 1'000'000;  // 1 kHz: the vibration sampled 35 times a period
-      sample.gyro_rad_s = w(NsToSeconds(sample.t_ns));
-      sample.accel_m_s2 = Eigen::Vector3d(0.0, 0.0, 9.81);
-      buffer->Push(sample);
-    }
-    std::vector<RotationObservation> obs;
-    for (int k = 0; k < 20; ++k) {
-      RotationObservation o;
-      o.t_a_ns = SecondsToNs(0.1 + 0.05 * k);
-      o.t_b_ns = o.t_a_ns + SecondsToNs(0.05);
-      Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
-      for (int j = 0; j < 500; ++j) {  // the rotation over the shifted interval, 0.1 ms steps
-        const double t = NsToSeconds(o.t_a_ns) + 0.010 + 1e-4 * (j + 0.5);
-        q = (q * ExpSO3(w(t) * 1e-4)).normalized();
-      }
-      o.imu_a_from_imu_b = q;
-      o.covariance = Eigen::Matrix3d::Identity() * 1e-8;
-      obs.push_back(o);
-    }
-    return obs;
-  };
   auto vibration = [&](double t) {
     return Eigen::Vector3d(w0 + Eigen::Vector3d(0.0, 0.2, 0.0) * std::sin(2.0 * M_PI * t / 0.035));
   };
-  ImuBuffer periodic;
-  const std::vector<RotationObservation> obs = observe(vibration, &periodic);
+  // 1 kHz: the vibration sampled 35 times a period.
+  const ImuBuffer periodic = GyroLog(vibration, 1'000'000, 1601);
+  const std::vector<RotationObservation> obs = RotationsSeen(vibration, 0.010, 0.1, 20, 1e-8, 1e-4);
   const TimeOffsetEstimate est = EstimateTimeOffset(periodic, params, Eigen::Vector3d::Zero(), obs);
   EXPECT_FALSE(est.measured);
   EXPECT_NE(est.reason.find("ambiguous: a second minimum of the cost at"), std::string::npos)
@@ -266,8 +260,9 @@ TEST(TimeOffset, APeriodicMotionIsAmbiguous) {
     return Eigen::Vector3d(vibration(t) +
                            Eigen::Vector3d(0.3 * std::sin(2.0 * M_PI * t / 0.7), 0.0, 0.0));
   };
-  ImuBuffer aperiodic;
-  const std::vector<RotationObservation> obs2 = observe(vibration_and_turn, &aperiodic);
+  const ImuBuffer aperiodic = GyroLog(vibration_and_turn, 1'000'000, 1601);
+  const std::vector<RotationObservation> obs2 =
+      RotationsSeen(vibration_and_turn, 0.010, 0.1, 20, 1e-8, 1e-4);
   const TimeOffsetEstimate one =
       EstimateTimeOffset(aperiodic, params, Eigen::Vector3d::Zero(), obs2);
   ASSERT_TRUE(one.measured) << one.reason;
