@@ -190,10 +190,12 @@ GridCost CostOf(const std::vector<Eigen::Vector3d>& r, const std::vector<Usable>
   return out;
 }
 
-// The grid's costs for the observations kept, and their lowest point.
+// The grid's costs for the observations kept, their lowest point, and how far the cost rises
+// above it over the grid.
 struct GridCosts {
   std::vector<GridCost> cost;
   size_t best = 0;
+  double range = 0.0;
 };
 GridCosts CostsOverGrid(const std::vector<std::vector<Eigen::Vector3d>>& residuals,
                         const std::vector<Usable>& usable, double scale2, double gate,
@@ -205,6 +207,9 @@ GridCosts CostsOverGrid(const std::vector<std::vector<Eigen::Vector3d>>& residua
     out.cost[k] = CostOf(residuals[k], usable, scale2, gate, keep);
     if (out.cost[k].cost < out.cost[out.best].cost) out.best = k;
   }
+  double highest = out.cost[out.best].cost;
+  for (const GridCost& c : out.cost) highest = std::max(highest, c.cost);
+  out.range = highest - out.cost[out.best].cost;
   return out;
 }
 
@@ -299,16 +304,16 @@ TimeOffsetEstimate EstimateTimeOffset(const ImuBuffer& imu, const ImuParams& par
   est.inliers = at.inliers;
   est.gyro_bias_correction = at.db;
   const double h = NsToSeconds(step_ns);
-  est.offset_s = (best - steps) * h;
+  // The offset of grid point k, or of a point between grid points.
+  auto offset_at = [&](double k) { return (k - steps) * h; };
+  est.offset_s = offset_at(best);
   const std::string searched =
       "+-" + std::to_string(static_cast<int>(std::lround(options.max_offset_s * 1e3))) +
       " ms searched";
   // The cost is a chi-square: an offset is told apart from another when the cost differs by 1 (one
   // sigma of one parameter). A cost that stays within 1 over the whole grid shows none, wherever
   // its minimum falls (on exact data the rounding decides it).
-  double highest = at.cost;
-  for (const GridCost& g : grid.cost) highest = std::max(highest, g.cost);
-  if (!(highest - at.cost >= 1.0)) {
+  if (!(grid.range >= 1.0)) {
     est.reason =
         "the fitted rotations do not vary enough to show an offset (the cost changes by "
         "less than 1 over the " +
@@ -335,7 +340,7 @@ TimeOffsetEstimate EstimateTimeOffset(const ImuBuffer& imu, const ImuParams& par
     const double c = grid.cost[k].cost;
     const bool local_minimum = (k == 0 || c <= grid.cost[k - 1].cost) &&
                                (k + 1 == grid.cost.size() || c <= grid.cost[k + 1].cost);
-    const double at_s = (static_cast<double>(k) - steps) * h;
+    const double at_s = offset_at(static_cast<double>(k));
     if (!local_minimum || std::fabs(at_s - est.offset_s) <= 3.0 * est.sigma_s + h) continue;
     if (c - at.cost < options.ambiguity_chi2) {
       std::ostringstream why;
@@ -360,17 +365,16 @@ TimeOffsetEstimate EstimateTimeOffset(const ImuBuffer& imu, const ImuParams& par
       std::vector<char> keep(all);
       for (size_t i = b * n / blocks; i < (b + 1) * n / blocks; ++i) keep[i] = 0;
       const GridCosts g = CostsOverGrid(residuals, usable, scale2, options.gate_chi2, keep);
-      double s_b = 0.0, second_b = 0.0, highest_b = g.cost[g.best].cost;
-      for (const GridCost& c : g.cost) highest_b = std::max(highest_b, c.cost);
+      double s_b = 0.0, second_b = 0.0;
       // As for all of them: a cost that changes by less than 1 shows no offset.
-      if (!(highest_b - g.cost[g.best].cost >= 1.0) || !ParabolaAtMinimum(g, &s_b, &second_b)) {
+      if (!(g.range >= 1.0) || !ParabolaAtMinimum(g, &s_b, &second_b)) {
         est.reason = "the offset is not shown without one of the " + std::to_string(blocks) +
                      " runs of consecutive fitted rotations (the cost is flat, or its minimum at "
                      "the edge of the " +
                      searched + ")";
         return est;
       }
-      leave_out.push_back((static_cast<double>(g.best) - steps + s_b) * h);
+      leave_out.push_back(offset_at(static_cast<double>(g.best) + s_b));
     }
     double mean = 0.0;
     for (const double o : leave_out) mean += o / static_cast<double>(blocks);

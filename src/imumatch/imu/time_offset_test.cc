@@ -273,24 +273,11 @@ TEST(TimeOffset, APeriodicMotionIsAmbiguous) {
 // report says why instead of giving a number.
 TEST(TimeOffset, ConstantAngularVelocityShowsNoOffset) {
   ImuParams params = ImuParams::EurocAdis16448();
-  ImuBuffer buffer;
   const Eigen::Vector3d w(0.1, -0.3, 0.5);
-  for (int64_t k = 0; k <= 1600; ++k) {
-    ImuSample sample;
-    sample.t_ns = k * 5'000'000;
-    sample.gyro_rad_s = w;
-    sample.accel_m_s2 = Eigen::Vector3d(0.0, 0.0, 9.81);
-    buffer.Push(sample);
-  }
-  std::vector<RotationObservation> obs;
-  for (int k = 0; k < 100; ++k) {
-    RotationObservation o;
-    o.t_a_ns = SecondsToNs(0.5 + 0.05 * k);
-    o.t_b_ns = o.t_a_ns + SecondsToNs(0.05);
-    o.imu_a_from_imu_b = ExpSO3(w * 0.05);
-    o.covariance = Eigen::Matrix3d::Identity() * 4e-8;
-    obs.push_back(o);
-  }
+  auto constant = [&](double) { return w; };
+  const ImuBuffer buffer = GyroLog(constant, 5'000'000, 1601);
+  // One integration step per interval: ExpSO3(w * 0.05) each (any offset reads the same).
+  const std::vector<RotationObservation> obs = RotationsSeen(constant, 0.0, 0.5, 100, 4e-8, 0.05);
   const TimeOffsetEstimate est = EstimateTimeOffset(buffer, params, Eigen::Vector3d::Zero(), obs);
   EXPECT_FALSE(est.measured);
   EXPECT_NE(est.reason.find("do not vary enough"), std::string::npos) << est.reason;
