@@ -128,6 +128,7 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
   MatchResult result = MatchGuided(predictions, ca.ideal, DescriptorView::FromMat(fa.descriptors),
                                    candidates_b, options.guided, &scratch);
   run.match_ms = MsSince(t0);
+  std::vector<float> fit_depths;  // the fit takes no depth read near an edge of the depth image
   if (options.second_pass && method == MatchMethod::kGuided) {
     // Second pass: the motion fitted to the first pass's matches, windows from its covariance,
     // when they search less than the first pass's. The fit and the new predictions are charged to
@@ -135,10 +136,12 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
     run.first_window_px = MeanWindowHalfSize(predictions);
     t0 = Clock::now();
     // The fit takes no depth read near an edge of the depth image; the predictions keep them.
-    run.refit =
-        RefitMotion(motion, result.matches, fa.keypoints, fb.keypoints,
-                    FitDepths(depth_a, camera.depth_scale, fa.keypoints, depths, options.refit),
-                    popts, undistorter, options.refit);
+    // The rotation the matches alone show is measured from the final matches (below).
+    fit_depths = FitDepths(depth_a, camera.depth_scale, fa.keypoints, depths, options.refit);
+    MotionRefitOptions refit_options = options.refit;
+    refit_options.measure_rotation = false;
+    run.refit = RefitMotion(motion, result.matches, fa.keypoints, fb.keypoints, fit_depths, popts,
+                            undistorter, refit_options);
     run.second_pass = run.refit.ok          ? SecondPassOutcome::kRan
                       : run.refit.disagrees ? SecondPassOutcome::kFitDisagreed
                                             : SecondPassOutcome::kNoFit;
@@ -187,6 +190,17 @@ MethodRun RunMethod(MatchMethod method, const PixelUndistorter& undistorter,
     run.refine_stats = RefineMatches(image_a.image, image_b.image, fa.keypoints, fb.keypoints,
                                      predictions, camera, options.subpixel, matches);
     run.refine_ms = MsSince(t0);
+  }
+  if (options.refit.measure_rotation && run.refit.ok) {
+    // The rotation the final matches alone measure, for the gyro bias filter and the time
+    // offset: those of the first pass, found in the IMU's windows, lean towards its rotation
+    // (MeasureRotationFromMatches). Charged to the fit.
+    t0 = Clock::now();
+    MeasureRotationFromMatches(motion, matches, fa.keypoints, fb.keypoints, fit_depths, popts,
+                               undistorter, options.refit, &run.refit);
+    const double ms = MsSince(t0);
+    run.refit_ms += ms;
+    run.predict_ms += ms;
   }
   if (!patch_query.empty()) {
     run.match_by_patch.resize(matches.size());

@@ -475,16 +475,18 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
     }
     // The windows: the motion and covariance RefitMotion finds from the IMU's prior and the first
     // pass's matches when it can; else the pose fit's with the covariance above.
+    // The rotation the matches alone show is measured from the second pass's (below).
     Rigid3d fitted = result.pose.cam_b_from_cam_a;
-    const MotionRefit refit = RefitMotion(
-        result.imu_motion, result.matches_pass1, prev.features.keypoints, features.keypoints,
-        FitDepths(prev.depth, camera.depth_scale, prev.features.keypoints, prev.depths,
-                  options_.refit),
-        options_.prediction, undistorter_, options_.refit);
+    const std::vector<float> fit_depths = FitDepths(
+        prev.depth, camera.depth_scale, prev.features.keypoints, prev.depths, options_.refit);
+    MotionRefitOptions refit_options = options_.refit;
+    refit_options.measure_rotation = false;
+    MotionRefit refit = RefitMotion(result.imu_motion, result.matches_pass1,
+                                    prev.features.keypoints, features.keypoints, fit_depths,
+                                    options_.prediction, undistorter_, refit_options);
     if (refit.ok) {
       refined = refit.motion;
       fitted = refit.motion.cam_b_from_cam_a;
-      UseFittedRotation(refit, prev.t_ns, frame.t_ns);
     }
     std::vector<KeypointPrediction> predictions2;
     int tracks2 = 0;
@@ -518,6 +520,14 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
       if (!(residual <= options_.pose.ransac_px)) continue;
       result.matches.push_back(m);
       result.from_tracks += m.train_idx < 0 ? 1 : 0;
+    }
+    if (refit.ok && options_.refit.measure_rotation) {
+      // From the matches found in the fit's windows: the first pass's, found in the IMU's, lean
+      // towards its rotation (MeasureRotationFromMatches).
+      MeasureRotationFromMatches(result.imu_motion, result.matches, prev.features.keypoints,
+                                 features.keypoints, fit_depths, options_.prediction, undistorter_,
+                                 options_.refit, &refit);
+      UseFittedRotation(refit, prev.t_ns, frame.t_ns);
     }
     result.second_pass = true;
     result.match2_ms = MsSince(t0);

@@ -95,6 +95,25 @@ struct MotionRefit {
   Eigen::Matrix3d rotation_from_matches_covariance = Eigen::Matrix3d::Zero();
 };
 
+// The rotation that other matches of the same pair alone measure, from refit's fit on: replaces
+// refit's rotation_from_matches (and _ok, _covariance) as RefitMotion sets them with
+// measure_rotation, but from matches found in the fit's own windows (a second pass, refined)
+// instead of the first pass's. The first pass's were found in the prior's windows, and where the
+// prior's rotation is off (a camera clock offset, a gyro bias), the matches at a window's edge that
+// it cut or kept lean the rotation measured from them towards the prior's: on EuRoC MH_05 with the
+// camera's clock shifted by +10 / -20 ms, the offset read from the first pass's rotations was
+// -8.9 / +18.6 ms, from the final matches' -9.9 / +20.0 ms (ORB, 199 pairs). prior: the motion
+// RefitMotion started from (its translation information is used, not its rotation). The
+// residuals' robust sigma is these matches' at the fit. Not set (ok false) when refit does not
+// hold, fewer than options.min_inliers matches remain or the solve does not converge.
+void MeasureRotationFromMatches(const CameraMotion& prior, const std::vector<Match>& matches,
+                                const std::vector<cv::KeyPoint>& keypoints_a,
+                                const std::vector<cv::KeyPoint>& keypoints_b,
+                                const std::vector<float>& depths_a,
+                                const PredictionOptions& prediction,
+                                const PixelUndistorter& undistorter,
+                                const MotionRefitOptions& options, MotionRefit* refit);
+
 // The rotation of the IMU between the pair's frames that a fit's matches measure, for a gyro bias
 // filter (GyroBiasFilter::Update): MotionRefit::rotation_from_matches, the matches' residuals
 // minimised with the prior's translation information only (the prior's rotation is the gyro's,
