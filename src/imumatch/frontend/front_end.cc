@@ -487,6 +487,14 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
     if (refit.ok) {
       refined = refit.motion;
       fitted = refit.motion.cam_b_from_cam_a;
+      // Where frame A has depth, the estimated motion as well: the fit of all the first pass's
+      // matches (reprojection rows where A has depth, epipolar rows elsewhere) with the IMU's
+      // motion as its prior, rather than PnP on the matches with depth alone (RANSAC on about
+      // 100 of MH_05's 800 matches per frame). On MH_05's 35 pairs with depth, ORB, relative
+      // pose error RMSE per frame: rotation 0.071 -> 0.0076 deg, translation 12.9 -> 1.4 mm.
+      // Without depth the epipolar fit stays: the fit's rotation there carries the IMU
+      // translation's error (0.0035 -> 0.015 deg on the 164 pairs without depth).
+      if (result.pose_from_depth) result.cam_from_prev = fitted;
     }
     std::vector<KeypointPrediction> predictions2;
     int tracks2 = 0;

@@ -141,7 +141,9 @@ struct FrontEndResult {
   CameraMotion imu_motion;  // the IMU's prediction (first pass)
   PoseFit pose;             // the fit between the passes
   bool pose_from_depth = false;
-  Rigid3d cam_from_prev;   // the estimated motion (the fit, or the IMU's when it failed)
+  // The estimated motion: the second pass's motion fit where the previous frame has depth, else
+  // the pose fit; the IMU's when it failed.
+  Rigid3d cam_from_prev;
   bool has_state = false;  // false while waiting for the IMU to initialise (no pose yet)
   Rigid3d world_from_cam;  // the estimated pose (world: gravity-aligned, first IMU pose)
   Eigen::Vector3d velocity_in_world = Eigen::Vector3d::Zero();  // IMU velocity
