@@ -144,6 +144,20 @@ void MirrorUpper(Eigen::Matrix<double, 6, 6>& h) {
   }
 }
 
+// The robust sigma of residuals (pixels) from the median of their absolute values: 1.4826 x the
+// median (a Gaussian's sigma), never below the floor min_residual_px.
+double SigmaFromMedianPx(double median_abs_px, double min_residual_px) {
+  return std::max(1.4826 * median_abs_px, min_residual_px);
+}
+
+// The prior's covariance with 1e-12 on its diagonal: invertible, and an exact prior (zero
+// covariance) stays as good as exact.
+Eigen::Matrix<double, 6, 6> RegularisedCovariance(const CameraMotion& prior) {
+  Eigen::Matrix<double, 6, 6> cov = prior.covariance;
+  cov.diagonal().array() += 1e-12;
+  return cov;
+}
+
 // The perturbation [dtheta; dt] from the prior (r_prior, t_prior) to the motion (r, t), in
 // CameraMotion's convention (MotionPerturbation), on the iterated rotation matrices.
 Eigen::Matrix<double, 6, 1> PriorOffset(const Eigen::Matrix3d& r, const Eigen::Vector3d& t,
@@ -196,7 +210,7 @@ MotionRefit SolveFrom(const Eigen::Vector3d& t_from, const std::vector<Correspon
     if (abs_rows.empty()) break;
     bool reweighted = false;
     if (reweight) {
-      const double next = std::max(1.4826 * UpperMedianInPlace(abs_rows), options.min_residual_px);
+      const double next = SigmaFromMedianPx(UpperMedianInPlace(abs_rows), options.min_residual_px);
       reweight = iteration == 0 || std::fabs(next - sigma) > 0.01 * sigma;
       reweighted = true;
       sigma = next;
@@ -442,8 +456,7 @@ MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& mat
     return base;
   }
 
-  Eigen::Matrix<double, 6, 6> prior_cov = prior.covariance;
-  prior_cov.diagonal().array() += 1e-12;  // an exact prior (zero covariance) stays exact
+  const Eigen::Matrix<double, 6, 6> prior_cov = RegularisedCovariance(prior);
   const Eigen::Matrix<double, 6, 6> prior_info = prior_cov.inverse();
   const Eigen::Matrix3d r_prior = prior.cam_b_from_cam_a.RotationMatrix();
   const Eigen::Vector3d& t_prior = prior.cam_b_from_cam_a.translation;
@@ -475,7 +488,7 @@ MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& mat
       start_median = dir_median;
     }
     if (options.direction_hypotheses > 0) {
-      start_sigma = std::max(options.min_residual_px, 1.4826 * start_median);
+      start_sigma = SigmaFromMedianPx(start_median, options.min_residual_px);
       searched = SearchTranslationDirection(
           ra_prior, xb_all, t_start, t_prior, prior_info.bottomRightCorner<3, 3>(), f, start_sigma,
           options.cauchy_scale, options.direction_hypotheses, scratch);
@@ -531,8 +544,7 @@ void MeasureRotationFromMatches(const CameraMotion& prior, const std::vector<Mat
   const double f = 0.5 * (camera.fx + camera.fy);
   Eigen::Matrix3d r = refit->motion.cam_b_from_cam_a.RotationMatrix();
   Eigen::Vector3d t = refit->motion.cam_b_from_cam_a.translation;
-  Eigen::Matrix<double, 6, 6> prior_cov = prior.covariance;
-  prior_cov.diagonal().array() += 1e-12;  // as RefitMotion
+  const Eigen::Matrix<double, 6, 6> prior_cov = RegularisedCovariance(prior);
   const Eigen::Matrix3d r_prior = prior.cam_b_from_cam_a.RotationMatrix();
   const double max_dedt2 = MaxEpipolarDedt2(f, prediction);
   // These matches' own robust sigma, as SolveFrom measures its rows': at the fit first, then at
@@ -551,7 +563,7 @@ void MeasureRotationFromMatches(const CameraMotion& prior, const std::vector<Mat
       if (row.rows == 2) abs_rows.push_back(std::fabs(row.e[1]));
     }
     if (abs_rows.empty()) return;
-    const double next = std::max(1.4826 * UpperMedianInPlace(abs_rows), options.min_residual_px);
+    const double next = SigmaFromMedianPx(UpperMedianInPlace(abs_rows), options.min_residual_px);
     if (pass > 0 && std::fabs(next - sigma) <= 0.01 * sigma) break;
     sigma = next;
     MeasureRotationFromMatches(cs, r, t, sigma, r_prior, prior.cam_b_from_cam_a.translation,
