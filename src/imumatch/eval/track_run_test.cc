@@ -94,26 +94,34 @@ TEST(TrackRun, RealFlightWithoutGroundTruthState) {
   EXPECT_GT(Precision(r, true, 0), Precision(r, false, 0));
   EXPECT_EQ(r.rpe.pairs(), 49u);
   // On the pairs whose frame A has depth the motion is the second pass's fit of all matches with
-  // the IMU's prior: against the laser tracker, RMSE per frame over the 35 pairs 0.018 deg and
-  // 3.6 mm here; PnP on the matches with depth alone gave 0.055 deg and 10.1 mm. (The `track`
-  // command, its defaults: 0.0076 deg and 1.4 mm, PnP 0.071 deg and 12.9 mm. The difference is
-  // one pair, 0 -> 1, 0.2 mm of motion: with ORB on one thread, as here (`track --threads 1` gives
-  // the same figures), the fit of all matches does not converge there and PnP's pose, 20 mm off,
-  // is the frame's motion; README, "Known limits".)
+  // the IMU's prior: against the laser tracker, RMSE per frame over the 35 pairs 0.0054 deg and
+  // 1.2 mm here (the `track` command, whose ORB runs on two threads: 0.0058 deg, 1.2 mm); PnP on
+  // the matches with depth alone gave 0.055 deg and 10.1 mm. On the take-off's first pair (0.2 mm
+  // of motion) that fit does not converge here, and PnP's pose, 20 mm off, was the frame's motion
+  // and velocity (0.018 deg and 3.6 mm over the 35 pairs): it disagrees with the IMU's motion and
+  // is not used now.
   double rotation2 = 0.0, translation2 = 0.0;
-  int with_depth = 0;
+  int with_depth = 0, pnp_refused = 0;
   for (const TrackFrameRecord& f : r.frames) {
     if (!f.result.pose_from_depth || f.rpe_rotation_deg < 0.0) continue;
     rotation2 += f.rpe_rotation_deg * f.rpe_rotation_deg;
     translation2 += f.rpe_translation_m * f.rpe_translation_m;
     ++with_depth;
+    if (f.result.event.find("PnP pose disagrees with the IMU") == std::string::npos) continue;
+    ++pnp_refused;
+    const double pnp_from_imu_m =
+        (f.result.pose.cam_b_from_cam_a.translation - f.result.cam_from_prev.translation).norm();
+    std::printf("frame %zu: PnP refused, %.2f mm from the IMU's motion; error %.2f mm\n", f.frame,
+                1e3 * pnp_from_imu_m, 1e3 * f.rpe_translation_m);
+    EXPECT_LT(f.rpe_translation_m, 0.002) << "frame " << f.frame;
   }
   ASSERT_GE(with_depth, 30);
+  EXPECT_GE(pnp_refused, 1);
   std::printf("pairs with depth: %d, rotation RMSE %.4f deg, translation RMSE %.2f mm\n",
               with_depth, std::sqrt(rotation2 / with_depth),
               1e3 * std::sqrt(translation2 / with_depth));
-  EXPECT_LT(std::sqrt(rotation2 / with_depth), 0.03);
-  EXPECT_LT(std::sqrt(translation2 / with_depth), 0.006);
+  EXPECT_LT(std::sqrt(rotation2 / with_depth), 0.01);
+  EXPECT_LT(std::sqrt(translation2 / with_depth), 0.0025);
 }
 
 // A camera whose clock runs 10 ms behind the IMU's (frames stamped 10 ms early, their ground truth

@@ -462,6 +462,7 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
   result.pose_ms = MsSince(t0);
 
   // Second pass: predictions from the fitted pose, windows from its residual.
+  bool pnp_refused = false;  // PnP's pose not used (below)
   if (options_.second_pass && result.pose.ok && result.status == FrameStatus::kGuided) {
     t0 = SteadyClock::now();
     CameraMotion refined = result.imu_motion;
@@ -484,6 +485,30 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
     MotionRefit refit = RefitMotion(result.imu_motion, result.matches_pass1,
                                     prev.features.keypoints, features.keypoints, fit_depths,
                                     options_.prediction, undistorter_, refit_options);
+    // Where the motion fit of all matches did not converge, PnP's pose on the ~100 matches with
+    // depth would be the frame's motion, its velocity and the second pass's windows. It must then
+    // agree with the IMU's motion as the fit must, under both covariances: at MH_05's take-off
+    // (pair 0 -> 1, 0.2 mm of motion, a translation direction the matches cannot tell) the fit
+    // wandered and PnP read the wrong depths there as 20 mm of motion. A fit that failed
+    // otherwise (beyond the prior, residuals beyond the keypoints' noise) says the IMU's motion
+    // is off (after an IMU gap, its attitude): then PnP stands.
+    if (refit.not_converged && result.pose_from_depth) {
+      CameraMotion both = result.imu_motion;
+      both.covariance.topLeftCorner<3, 3>().diagonal().array() += fit_angle_sigma * fit_angle_sigma;
+      both.covariance.bottomRightCorner<3, 3>().diagonal().array() +=
+          fit_translation_sigma * fit_translation_sigma;
+      const double m2 = SquaredMahalanobis(both, result.pose.cam_b_from_cam_a);
+      const double gate = MotionAgreementGate(options_.refit.agreement_probability);
+      pnp_refused = !(m2 <= gate);
+      if (pnp_refused) {
+        result.cam_from_prev = result.imu_motion.cam_b_from_cam_a;
+        std::ostringstream note;
+        note << refit.reason << "; PnP pose disagrees with the IMU's motion (squared Mahalanobis "
+             << "distance " << std::setprecision(3) << m2 << " > " << gate
+             << "): the IMU's motion kept, no second pass";
+        result.event = result.event.empty() ? note.str() : result.event + "; " + note.str();
+      }
+    }
     if (refit.ok) {
       refined = refit.motion;
       fitted = refit.motion.cam_b_from_cam_a;
@@ -496,48 +521,50 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
       // translation's error (0.0035 -> 0.015 deg on the 164 pairs without depth).
       if (result.pose_from_depth) result.cam_from_prev = fitted;
     }
-    std::vector<KeypointPrediction> predictions2;
-    int tracks2 = 0;
-    std::vector<Match> second = MatchPass(refined, features, ideal, gray, true,
-                                          &result.matches_pass1, scene, predictions2, tracks2);
-    // Keep the matches the fitted geometry explains: reprojection (with depth) or epipolar
-    // distance (without) within the fit's inlier threshold, in ideal pixels.
-    const Eigen::Matrix3d rf = fitted.rotation.toRotationMatrix();
-    const Eigen::Vector3d tf = fitted.translation;
-    const double f = 0.5 * (camera.fx + camera.fy);
-    result.matches.clear();
-    result.from_tracks = 0;
-    for (const Match& m : second) {
-      const cv::Point2f& ka = prev.features.keypoints[static_cast<size_t>(m.query_idx)].pt;
-      const Eigen::Vector2d pb = PositionInB(m, features.keypoints);
-      const Eigen::Vector2d ia = undistorter_.ToIdeal(Eigen::Vector2d(ka.x, ka.y));
-      const Eigen::Vector2d ib = undistorter_.ToIdeal(pb);
-      const Eigen::Vector3d xa = camera.IdealToNormalized(ia).homogeneous();
-      const Eigen::Vector3d xb = camera.IdealToNormalized(ib).homogeneous();
-      double residual = 0.0;
-      const double z =
-          prev.depths.empty() ? std::nan("") : prev.depths[static_cast<size_t>(m.query_idx)];
-      if (result.pose_from_depth && options_.prediction.IsUsableDepth(z)) {
-        const Eigen::Vector3d q = rf * (xa * z) + tf;
-        residual = f * (q.head<2>() / q.z() - xb.head<2>()).norm();
-      } else {
-        const Eigen::Vector3d line = tf.cross(rf * xa);
-        const double norm = std::hypot(line.x(), line.y());
-        residual = norm > 0.0 ? f * std::fabs(xb.dot(line)) / norm : 0.0;
+    if (!pnp_refused) {
+      std::vector<KeypointPrediction> predictions2;
+      int tracks2 = 0;
+      std::vector<Match> second = MatchPass(refined, features, ideal, gray, true,
+                                            &result.matches_pass1, scene, predictions2, tracks2);
+      // Keep the matches the fitted geometry explains: reprojection (with depth) or epipolar
+      // distance (without) within the fit's inlier threshold, in ideal pixels.
+      const Eigen::Matrix3d rf = fitted.rotation.toRotationMatrix();
+      const Eigen::Vector3d tf = fitted.translation;
+      const double f = 0.5 * (camera.fx + camera.fy);
+      result.matches.clear();
+      result.from_tracks = 0;
+      for (const Match& m : second) {
+        const cv::Point2f& ka = prev.features.keypoints[static_cast<size_t>(m.query_idx)].pt;
+        const Eigen::Vector2d pb = PositionInB(m, features.keypoints);
+        const Eigen::Vector2d ia = undistorter_.ToIdeal(Eigen::Vector2d(ka.x, ka.y));
+        const Eigen::Vector2d ib = undistorter_.ToIdeal(pb);
+        const Eigen::Vector3d xa = camera.IdealToNormalized(ia).homogeneous();
+        const Eigen::Vector3d xb = camera.IdealToNormalized(ib).homogeneous();
+        double residual = 0.0;
+        const double z =
+            prev.depths.empty() ? std::nan("") : prev.depths[static_cast<size_t>(m.query_idx)];
+        if (result.pose_from_depth && options_.prediction.IsUsableDepth(z)) {
+          const Eigen::Vector3d q = rf * (xa * z) + tf;
+          residual = f * (q.head<2>() / q.z() - xb.head<2>()).norm();
+        } else {
+          const Eigen::Vector3d line = tf.cross(rf * xa);
+          const double norm = std::hypot(line.x(), line.y());
+          residual = norm > 0.0 ? f * std::fabs(xb.dot(line)) / norm : 0.0;
+        }
+        if (!(residual <= options_.pose.ransac_px)) continue;
+        result.matches.push_back(m);
+        result.from_tracks += m.train_idx < 0 ? 1 : 0;
       }
-      if (!(residual <= options_.pose.ransac_px)) continue;
-      result.matches.push_back(m);
-      result.from_tracks += m.train_idx < 0 ? 1 : 0;
+      if (refit.ok && options_.refit.measure_rotation) {
+        // From the matches found in the fit's windows: the first pass's, found in the IMU's, lean
+        // towards its rotation (MeasureRotationFromMatches).
+        MeasureRotationFromMatches(result.imu_motion, result.matches, prev.features.keypoints,
+                                   features.keypoints, fit_depths, options_.prediction,
+                                   undistorter_, options_.refit, &refit);
+        UseFittedRotation(refit, prev.t_ns, frame.t_ns);
+      }
+      result.second_pass = true;
     }
-    if (refit.ok && options_.refit.measure_rotation) {
-      // From the matches found in the fit's windows: the first pass's, found in the IMU's, lean
-      // towards its rotation (MeasureRotationFromMatches).
-      MeasureRotationFromMatches(result.imu_motion, result.matches, prev.features.keypoints,
-                                 features.keypoints, fit_depths, options_.prediction, undistorter_,
-                                 options_.refit, &refit);
-      UseFittedRotation(refit, prev.t_ns, frame.t_ns);
-    }
-    result.second_pass = true;
     result.match2_ms = MsSince(t0);
   }
 
@@ -563,7 +590,7 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
         std::sqrt(velocity_fix_sigma_ * velocity_fix_sigma_ +
                   std::pow(options_.motion.accel_bias_sigma * since_fix, 2) +
                   imu_params_.accel_noise_density * imu_params_.accel_noise_density * since_fix);
-    if (result.pose_from_depth) {
+    if (result.pose_from_depth && !pnp_refused) {
       // The velocity that explains the fitted translation, given the IMU's increments.
       const Eigen::Matrix3d ra = world_from_imu_.rotation.toRotationMatrix();
       const Eigen::Vector3d& g = imu_params_.gravity_in_world;

@@ -268,10 +268,11 @@ MotionRefit SolveFrom(const Eigen::Vector3d& t_from, const std::vector<Correspon
   // Not converged: the last step was more than the fit's own standard deviation, so the windows
   // would be centred farther from the optimum than their motion part is wide.
   if (!(last_step2 <= 1.0)) {
+    out.not_converged = true;
     out.reason = "motion fit: not converged in " + std::to_string(options.iterations) + " steps";
     return out;
   }
-  const double gate = ChiSquare6Quantile(options.agreement_probability);
+  const double gate = MotionAgreementGate(options.agreement_probability);
   if (!(out.mahalanobis2 <= gate) || !r.allFinite() || !t.allFinite()) {
     out.disagrees = true;
     out.reason = "the fit disagrees with the prior motion (squared Mahalanobis distance " +
@@ -436,6 +437,12 @@ std::vector<Correspondence> ToCorrespondences(
 }
 
 }  // namespace
+
+double MotionAgreementGate(double probability) {
+  IMUMATCH_CHECK(probability > 0.0 && probability < 1.0,
+                 "agreement probability " << probability << " must be in (0, 1)");
+  return ChiSquare6Quantile(probability);
+}
 
 MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& matches,
                         const std::vector<cv::KeyPoint>& keypoints_a,

@@ -76,9 +76,10 @@ struct MotionRefitOptions {
 };
 
 struct MotionRefit {
-  bool ok = false;         // motion holds the fit; otherwise it is the prior, unchanged
-  bool disagrees = false;  // not ok because the fit lies beyond the prior's uncertainty
-  std::string reason;      // why not ok
+  bool ok = false;             // motion holds the fit; otherwise it is the prior, unchanged
+  bool disagrees = false;      // not ok because the fit lies beyond the prior's uncertainty
+  bool not_converged = false;  // not ok because the last step exceeded the fit's own sigma
+  std::string reason;          // why not ok
   int correspondences = 0;
   int with_depth = 0;  // of them, with a usable depth in A (reprojection residuals)
   int inliers = 0;
@@ -146,6 +147,11 @@ bool UpdateGyroBiasFromFit(const MotionRefit& refit, const Rigid3d& cam_from_imu
 // Where a correspondence ends in B (image pixels): the refined position or the track's, else the
 // matched keypoint.
 Eigen::Vector2d PositionInB(const Match& m, const std::vector<cv::KeyPoint>& keypoints_b);
+
+// The squared Mahalanobis distance (6 degrees of freedom) within which a motion agrees with a
+// prior with the given probability: the chi-square quantile of RefitMotion's agreement test
+// (MotionRefitOptions::agreement_probability; 0.9999: 27.86). InvalidArgument outside (0, 1).
+double MotionAgreementGate(double probability);
 
 // The depths to give RefitMotion for A's keypoints: depths_a (SampleDepths of depth_a, metres, NaN
 // for none) with the readings near an edge of depth_a cleared as options.depth_edges says; empty
