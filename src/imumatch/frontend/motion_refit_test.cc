@@ -175,6 +175,16 @@ TEST(MotionRefitTest, AFitFarOutsideThePriorIsRefused) {
   EXPECT_EQ(r.motion.covariance, prior.covariance);
 }
 
+// The chi-square quantiles of 6 degrees of freedom (tables: 22.458 at 0.999, 27.856 at 0.9999,
+// 12.592 at 0.95), and a probability outside (0, 1) refused.
+TEST(MotionRefitTest, TheAgreementGateIsTheChiSquareQuantileOfSixDof) {
+  EXPECT_NEAR(MotionAgreementGate(0.999), 22.458, 2e-3);
+  EXPECT_NEAR(MotionAgreementGate(0.9999), 27.856, 2e-3);
+  EXPECT_NEAR(MotionAgreementGate(0.95), 12.592, 2e-3);
+  EXPECT_THROW(MotionAgreementGate(1.0), InvalidArgument);
+  EXPECT_THROW(MotionAgreementGate(0.0), InvalidArgument);
+}
+
 TEST(MotionRefitTest, AnExactPriorStaysExact) {
   const Scene s = MakeScene(TrueMotion(), 200, 0.5, 0.1);
   const PixelUndistorter und(Camera());
