@@ -494,9 +494,7 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
     // is off (after an IMU gap, its attitude): then PnP stands.
     if (refit.not_converged && result.pose_from_depth) {
       CameraMotion both = result.imu_motion;
-      both.covariance.topLeftCorner<3, 3>().diagonal().array() += fit_angle_sigma * fit_angle_sigma;
-      both.covariance.bottomRightCorner<3, 3>().diagonal().array() +=
-          fit_translation_sigma * fit_translation_sigma;
+      both.covariance += refined.covariance;  // refined: PnP's pose and covariance (above)
       const double m2 = SquaredMahalanobis(both, result.pose.cam_b_from_cam_a);
       const double gate = MotionAgreementGate(options_.refit.agreement_probability);
       pnp_refused = !(m2 <= gate);

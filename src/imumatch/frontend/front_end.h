@@ -142,8 +142,8 @@ struct FrontEndResult {
   PoseFit pose;             // the fit between the passes
   bool pose_from_depth = false;
   // The estimated motion: the second pass's motion fit where the previous frame has depth, else
-  // the pose fit; the IMU's when it failed, or when the motion fit did not hold (other than by
-  // disagreeing with the IMU) and PnP's pose disagrees with the IMU's motion.
+  // the pose fit; the IMU's when it failed, or when the motion fit did not converge and PnP's pose
+  // disagrees with the IMU's motion.
   Rigid3d cam_from_prev;
   bool has_state = false;  // false while waiting for the IMU to initialise (no pose yet)
   Rigid3d world_from_cam;  // the estimated pose (world: gravity-aligned, first IMU pose)
