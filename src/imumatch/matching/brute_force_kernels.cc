@@ -2,6 +2,7 @@
 // every multiply and add as written, never fused.
 #include "imumatch/matching/brute_force_kernels.h"
 
+#include <algorithm>
 #include <cstring>
 #include <limits>
 #include <string>
@@ -375,24 +376,11 @@ __attribute__((target("avx2"))) void HammingAvx2Words(const DescriptorView& a,
 }
 
 void HammingAvx2(const DescriptorView& a, const DescriptorView& b, Nearest2& out) {
-  switch (a.bytes / 8) {
-    case 1:
-      return HammingAvx2Words<1>(a, b, out);
-    case 2:
-      return HammingAvx2Words<2>(a, b, out);
-    case 3:
-      return HammingAvx2Words<3>(a, b, out);
-    case 4:
-      return HammingAvx2Words<4>(a, b, out);
-    case 5:
-      return HammingAvx2Words<5>(a, b, out);
-    case 6:
-      return HammingAvx2Words<6>(a, b, out);
-    case 7:
-      return HammingAvx2Words<7>(a, b, out);
-    default:
-      return HammingAvx2Words<8>(a, b, out);
-  }
+  using Kernel = void (*)(const DescriptorView&, const DescriptorView&, Nearest2&);
+  static constexpr Kernel kByWords[] = {
+      HammingAvx2Words<1>, HammingAvx2Words<2>, HammingAvx2Words<3>, HammingAvx2Words<4>,
+      HammingAvx2Words<5>, HammingAvx2Words<6>, HammingAvx2Words<7>, HammingAvx2Words<8>};
+  kByWords[std::clamp(a.bytes / 8, 1, 8) - 1](a, b, out);
 }
 
 // L2 in one summation order on every path, so that all paths give the same bits: 16 partial sums,
