@@ -30,6 +30,7 @@
 #include "imumatch/eval/method_run.h"
 #include "imumatch/eval/pair_motion.h"
 #include "imumatch/eval/pipelined.h"
+#include "imumatch/frontend/rotation_from_fit.h"
 
 namespace imumatch {
 namespace {

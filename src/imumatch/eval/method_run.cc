@@ -5,6 +5,7 @@
 
 #include "imumatch/core/time.h"
 #include "imumatch/frontend/motion_refit.h"
+#include "imumatch/frontend/second_pass.h"
 #include "imumatch/matching/baseline_matchers.h"
 #include "imumatch/matching/grid_index.h"
 #include "imumatch/matching/guided_matcher.h"

@@ -13,6 +13,7 @@
 #include "imumatch/features/feature_factory.h"
 #include "imumatch/frontend/motion_refit.h"
 #include "imumatch/frontend/pose_estimation.h"
+#include "imumatch/frontend/rotation_from_fit.h"
 #include "imumatch/imu/camera_motion.h"
 #include "imumatch/imu/gyro_bias_filter.h"
 #include "imumatch/imu/imu_buffer.h"

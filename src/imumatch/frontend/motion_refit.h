@@ -10,10 +10,6 @@
 
 #include "imumatch/camera/pixel_undistorter.h"
 #include "imumatch/imu/camera_motion.h"
-#include "imumatch/imu/gyro_bias_filter.h"
-#include "imumatch/imu/imu_buffer.h"
-#include "imumatch/imu/imu_params.h"
-#include "imumatch/imu/time_offset.h"
 #include "imumatch/matching/depth_edges.h"
 #include "imumatch/matching/match_types.h"
 #include "imumatch/matching/predictor.h"
@@ -115,35 +111,6 @@ void MeasureRotationFromMatches(const CameraMotion& prior, const std::vector<Mat
                                 const PixelUndistorter& undistorter,
                                 const MotionRefitOptions& options, MotionRefit* refit);
 
-// The rotation of the IMU between the pair's frames that a fit's matches measure, for a gyro bias
-// filter (GyroBiasFilter::Update): MotionRefit::rotation_from_matches, the matches' residuals
-// minimised with the prior's translation information only (the prior's rotation is the gyro's,
-// which the filter has already; the epipolar residuals do not see the translation's length),
-// expressed for the IMU through cam_from_imu: imu_a_from_imu_b and its covariance (right
-// perturbation). nullopt when rotation_from_matches is not set.
-struct ImuRotationMeasurement {
-  Eigen::Quaterniond imu_a_from_imu_b = Eigen::Quaterniond::Identity();
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-};
-std::optional<ImuRotationMeasurement> ImuRotationFromFit(const MotionRefit& refit,
-                                                         const Rigid3d& cam_from_imu);
-
-// The same as an observation of the camera's clock offset (EstimateTimeOffset) between the
-// frames' camera times t_a_ns < t_b_ns; nullopt when there is no measured rotation or its
-// covariance is not finite and positive definite (a degenerate fit: left out rather than let it
-// make the whole estimate fail).
-std::optional<RotationObservation> RotationObservationFromFit(const MotionRefit& refit,
-                                                              const Rigid3d& cam_from_imu,
-                                                              int64_t t_a_ns, int64_t t_b_ns);
-
-// Feeds the rotation refit measured between t_a_ns and t_b_ns (ImuRotationFromFit) to filter,
-// with the IMU samples of that interval. Returns false when there was nothing to feed (no
-// measured rotation) or the interval is one the filter cannot use (across an IMU gap, before its
-// last update); otherwise GyroBiasFilter::Update's own result (false when its gate refused it).
-bool UpdateGyroBiasFromFit(const MotionRefit& refit, const Rigid3d& cam_from_imu,
-                           const ImuBuffer& imu, const ImuParams& params, int64_t t_a_ns,
-                           int64_t t_b_ns, GyroBiasFilter* filter);
-
 // Where a correspondence ends in B (image pixels): the refined position or the track's, else the
 // matched keypoint.
 Eigen::Vector2d PositionInB(const Match& m, const std::vector<cv::KeyPoint>& keypoints_b);
@@ -179,18 +146,5 @@ MotionRefit RefitMotion(const CameraMotion& prior, const std::vector<Match>& mat
                         const std::vector<cv::KeyPoint>& keypoints_b,
                         const std::vector<float>& depths_a, const PredictionOptions& prediction,
                         const PixelUndistorter& undistorter, const MotionRefitOptions& options);
-
-// The predictor of a second pass with a fitted motion (refit.ok, else InvalidArgument): the
-// fitted motion and covariance, the segments' near end of the first pass (first_pass_scene).
-KeypointPredictor SecondPassPredictor(const PixelUndistorter& undistorter, const MotionRefit& refit,
-                                      const PredictionOptions& prediction,
-                                      const SceneNearDepth& first_pass_scene);
-
-// The summed area (px^2) of the predictions' search regions: a box's 4 hw hh, a capsule's
-// 2 r L + pi r^2. A second pass is worth its cost only when it searches less than the first: the
-// candidates a window holds, rivals of the true partner in the ratio test, grow with its area.
-// A fit that does not shrink the windows (its residuals larger than the keypoints' noise, or a
-// prior already as tight) is no reason to match again.
-double SearchArea(const std::vector<KeypointPrediction>& predictions);
 
 }  // namespace imumatch

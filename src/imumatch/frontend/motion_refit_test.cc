@@ -9,76 +9,12 @@
 
 #include "imumatch/core/error.h"
 #include "imumatch/core/so3.h"
+#include "imumatch/frontend/motion_refit_test_util.h"
 
 namespace imumatch {
 namespace {
 
-PinholeCamera Camera() { return PinholeCamera::KinectDefault(); }
-
-// Appends the match of a keypoint of A at uv_a with one of B at uv_b (both of size 7).
-void AddMatch(const Eigen::Vector2d& uv_a, const Eigen::Vector2d& uv_b,
-              std::vector<cv::KeyPoint>* keypoints_a, std::vector<cv::KeyPoint>* keypoints_b,
-              std::vector<Match>* matches) {
-  Match m;
-  m.query_idx = static_cast<int>(keypoints_a->size());
-  m.train_idx = static_cast<int>(keypoints_b->size());
-  keypoints_a->emplace_back(static_cast<float>(uv_a.x()), static_cast<float>(uv_a.y()), 7.0f);
-  keypoints_b->emplace_back(static_cast<float>(uv_b.x()), static_cast<float>(uv_b.y()), 7.0f);
-  matches->push_back(m);
-}
-
-Rigid3d TrueMotion() {
-  return Rigid3d(ExpSO3(Eigen::Vector3d(0.01, -0.03, 0.02)), Eigen::Vector3d(0.05, -0.02, 0.08));
-}
-
-// Matches of points 2-6 m in front of A seen from B (the true motion): B's positions with Gaussian
-// pixel noise, a share of them replaced by a wrong position a few pixels to 30 px away (inside
-// the windows an IMU would give, as a first pass's false matches are). depths: A's depth per
-// keypoint (exact).
-struct Scene {
-  std::vector<cv::KeyPoint> keypoints_a, keypoints_b;
-  std::vector<Match> matches;
-  std::vector<float> depths;
-};
-Scene MakeScene(const Rigid3d& b_from_a, int n, double noise_px, double outlier_share,
-                uint64_t seed = 3) {
-  const PinholeCamera c = Camera();
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::normal_distribution<double> gauss(0.0, noise_px);
-  Scene s;
-  while (static_cast<int>(s.matches.size()) < n) {
-    const Eigen::Vector2d uv(40 + 560 * u(rng), 40 + 400 * u(rng));
-    const double z = 2.0 + 4.0 * u(rng);
-    const Eigen::Vector3d q = b_from_a * c.Unproject(uv, z);
-    Eigen::Vector2d pb(c.fx * q.x() / q.z() + c.cx, c.fy * q.y() / q.z() + c.cy);
-    if (u(rng) < outlier_share) {
-      const double a = 2.0 * M_PI * u(rng), r = 3.0 + 27.0 * u(rng);
-      pb += r * Eigen::Vector2d(std::cos(a), std::sin(a));
-    } else {
-      pb += Eigen::Vector2d(gauss(rng), gauss(rng));
-    }
-    AddMatch(uv, pb, &s.keypoints_a, &s.keypoints_b, &s.matches);
-    s.depths.push_back(static_cast<float>(z));
-  }
-  return s;
-}
-
-// The IMU's motion: the truth moved by `offset` ([dtheta; dt]), with a diagonal covariance.
-CameraMotion Prior(const Eigen::Matrix<double, 6, 1>& offset,
-                   const Eigen::Matrix<double, 6, 1>& sigma) {
-  CameraMotion m;
-  m.cam_b_from_cam_a = Rigid3d(ExpSO3(offset.head<3>()) * TrueMotion().rotation,
-                               TrueMotion().translation + offset.tail<3>());
-  m.covariance = sigma.cwiseAbs2().asDiagonal();
-  return m;
-}
-
-Eigen::Matrix<double, 6, 1> Vec6(double a, double b, double c, double d, double e, double f) {
-  Eigen::Matrix<double, 6, 1> v;
-  v << a, b, c, d, e, f;
-  return v;
-}
+using namespace refit_test;  // NOLINT(build/namespaces)
 
 // What the second pass needs of a fit: the truth inside its covariance (chi-square, 6 dof,
 // 99.9 %: 22.46), and every axis's sigma below `shrink` times the prior's.
@@ -91,7 +27,7 @@ void ExpectTruthInsideAndTighter(const MotionRefit& r, const Eigen::Matrix<doubl
 }
 
 TEST(MotionRefitTest, WithDepthTheFitHoldsTheTruthAndIsFarTighterThanTheIMU) {
-  const Scene s = MakeScene(TrueMotion(), 300, 0.5, 0.15);
+  const MatchScene s = MakeMatchScene(TrueMotion(), 300, 0.5, 0.15);
   const PixelUndistorter und(Camera());
   // An IMU prediction 2 sigma off on every axis (0.1 deg, 1 cm sigmas).
   const Eigen::Matrix<double, 6, 1> sigma = Vec6(2e-3, 2e-3, 2e-3, 0.01, 0.01, 0.01);
@@ -115,7 +51,7 @@ TEST(MotionRefitTest, WithDepthTheFitHoldsTheTruthAndIsFarTighterThanTheIMU) {
 }
 
 TEST(MotionRefitTest, WithoutDepthTheDirectionIsFittedAndTheLengthStaysTheIMUs) {
-  const Scene s = MakeScene(TrueMotion(), 300, 0.5, 0.15);
+  const MatchScene s = MakeMatchScene(TrueMotion(), 300, 0.5, 0.15);
   const PixelUndistorter und(Camera());
   const Eigen::Vector3d t = TrueMotion().translation;
   const Eigen::Vector3d dir = t.normalized();
@@ -146,7 +82,7 @@ TEST(MotionRefitTest, WithoutDepthTheDirectionIsFittedAndTheLengthStaysTheIMUs) 
 
 // A first pass on a hard pair (MH_05 at take-off: 35 % judged false).
 TEST(MotionRefitTest, AThirdOfTheMatchesWrongStillGivesTheTruth) {
-  const Scene s = MakeScene(TrueMotion(), 400, 0.5, 0.35, 9);
+  const MatchScene s = MakeMatchScene(TrueMotion(), 400, 0.5, 0.35, 9);
   const PixelUndistorter und(Camera());
   const Eigen::Matrix<double, 6, 1> sigma = Vec6(2e-3, 2e-3, 2e-3, 0.01, 0.01, 0.01);
   const CameraMotion prior = Prior(sigma, sigma);
@@ -161,7 +97,7 @@ TEST(MotionRefitTest, AThirdOfTheMatchesWrongStillGivesTheTruth) {
 }
 
 TEST(MotionRefitTest, AFitFarOutsideThePriorIsRefused) {
-  const Scene s = MakeScene(TrueMotion(), 300, 0.5, 0.0);
+  const MatchScene s = MakeMatchScene(TrueMotion(), 300, 0.5, 0.0);
   const PixelUndistorter und(Camera());
   // A prior sure to 1 mm / 0.006 deg but 3 cm off: the images disagree, the prior stands.
   const Eigen::Matrix<double, 6, 1> sigma = Vec6(1e-4, 1e-4, 1e-4, 1e-3, 1e-3, 1e-3);
@@ -186,7 +122,7 @@ TEST(MotionRefitTest, TheAgreementGateIsTheChiSquareQuantileOfSixDof) {
 }
 
 TEST(MotionRefitTest, AnExactPriorStaysExact) {
-  const Scene s = MakeScene(TrueMotion(), 200, 0.5, 0.1);
+  const MatchScene s = MakeMatchScene(TrueMotion(), 200, 0.5, 0.1);
   const PixelUndistorter und(Camera());
   CameraMotion prior;
   prior.cam_b_from_cam_a = TrueMotion();  // zero covariance: the ground truth
@@ -199,7 +135,7 @@ TEST(MotionRefitTest, AnExactPriorStaysExact) {
 }
 
 TEST(MotionRefitTest, TooFewMatchesAndBadInput) {
-  const Scene s = MakeScene(TrueMotion(), 8, 0.5, 0.0);
+  const MatchScene s = MakeMatchScene(TrueMotion(), 8, 0.5, 0.0);
   const PixelUndistorter und(Camera());
   const Eigen::Matrix<double, 6, 1> sigma = Vec6(2e-3, 2e-3, 2e-3, 0.01, 0.01, 0.01);
   const CameraMotion prior = Prior(sigma, sigma);
@@ -223,42 +159,10 @@ TEST(MotionRefitTest, TooFewMatchesAndBadInput) {
   EXPECT_THROW(o.Check(), InvalidArgument);
 }
 
-TEST(MotionRefitTest, SecondPassWindowsShrinkToTheFit) {
-  const Scene s = MakeScene(TrueMotion(), 300, 0.5, 0.0);
-  const PixelUndistorter und(Camera());
-  const Eigen::Matrix<double, 6, 1> sigma = Vec6(2e-3, 2e-3, 2e-3, 0.01, 0.01, 0.01);
-  const CameraMotion prior = Prior(sigma, sigma);
-  MotionRefit r = RefitMotion(prior, s.matches, s.keypoints_a, s.keypoints_b, s.depths,
-                              PredictionOptions(), und, MotionRefitOptions());
-  ASSERT_TRUE(r.ok) << r.reason;
-  PredictionOptions po;
-  po.min_half_size = 0.0;
-  const SceneNearDepth scene;
-  const Eigen::Vector2d uv(300.0, 200.0);
-  const KeypointPrediction first = KeypointPredictor(und, prior, po).Predict(uv, 3.0);
-  const KeypointPrediction tight = SecondPassPredictor(und, r, po, scene).Predict(uv, 3.0);
-  // 1 px keypoints: the window is about the keypoints' noise, sqrt(9.21 * 2) = 4.3 px.
-  EXPECT_LT(tight.max_x - tight.min_x, 0.6f * (first.max_x - first.min_x));
-  EXPECT_LT(0.5f * (tight.max_x - tight.min_x), 4.6f);
-  EXPECT_LT(SearchArea({tight}), 0.4 * SearchArea({first}));
-  // The segments keep the first pass's near end.
-  SceneNearDepth moved;
-  moved.moved = true;
-  moved.segment_min_depth_m = 2.0;
-  const KeypointPrediction seg = SecondPassPredictor(und, r, po, moved).Predict(uv, std::nan(""));
-  ASSERT_EQ(seg.status, PredictionStatus::kWithoutDepth);
-  const Eigen::Vector3d near_b = r.motion.cam_b_from_cam_a * Camera().Unproject(uv, 2.0);
-  const Eigen::Vector2d near(Camera().fx * near_b.x() / near_b.z() + Camera().cx,
-                             Camera().fy * near_b.y() / near_b.z() + Camera().cy);
-  EXPECT_LT((seg.segment_start.cast<double>() - near).norm(), 5.0);
-  r.ok = false;
-  EXPECT_THROW(SecondPassPredictor(und, r, po, scene), InvalidArgument);
-}
-
 // Residuals of 3 px where the keypoints promise 1 px: the motion does not explain the matches
 // (here: B's positions scattered), and the IMU's windows stand.
 TEST(MotionRefitTest, ResidualsBeyondTheKeypointsNoiseAreRefused) {
-  const Scene s = MakeScene(TrueMotion(), 300, 3.0, 0.0);
+  const MatchScene s = MakeMatchScene(TrueMotion(), 300, 3.0, 0.0);
   const PixelUndistorter und(Camera());
   const Eigen::Matrix<double, 6, 1> sigma = Vec6(2e-3, 2e-3, 2e-3, 0.01, 0.01, 0.01);
   const CameraMotion prior = Prior(sigma, sigma);
@@ -412,74 +316,6 @@ TEST(MotionRefitTest, ATurnOnTheSpotWithoutDepthKeepsTheTruthInsideTheFitsCovari
   EXPECT_GE(inside, held - 1);
 }
 
-// The rotation for the gyro bias filter: a prior 3 sigma off in rotation (a gyro bias the
-// integration did not remove) with a tight rotation sigma pulls the fit towards itself, by a
-// fraction its noise does not hide over 40 scenes; the measurement without the prior's rotation
-// information is unbiased (its mean error along the prior's offset within 3 standard errors of
-// zero) and its covariance is calibrated (mean chi-square 3 dof within 2-4.5) except without
-// depth with 10 % wrong matches. Through a camera rotated against the IMU (EuRoC's cam0 is about
-// 90 deg about z), with and without depth, without and with wrong matches.
-TEST(MotionRefitTest, ImuRotationFromFitTakesOutThePriorsRotation) {
-  const Rigid3d cam_from_imu(ExpSO3(Eigen::Vector3d(0.02, -0.01, M_PI / 2)),
-                             Eigen::Vector3d(0.02, -0.06, 0.01));
-  const Eigen::Quaterniond r_ic = cam_from_imu.rotation.conjugate();
-  auto imu_a_from_imu_b = [&](const Eigen::Quaterniond& cam_b_from_cam_a) {
-    return Eigen::Quaterniond(r_ic * cam_b_from_cam_a * cam_from_imu.rotation).conjugate();
-  };
-  const Eigen::Quaterniond truth = imu_a_from_imu_b(TrueMotion().rotation);
-  const Eigen::Vector3d offset_in_cam(9e-4, -9e-4, 9e-4);
-  // The prior's offset as a right perturbation of imu_a_from_imu_b: -R_ic offset.
-  const Eigen::Vector3d dir = -(r_ic * offset_in_cam).normalized();
-  for (const double outliers : {0.0, 0.1}) {
-    for (const bool with_depth : {false, true}) {
-      SCOPED_TRACE(std::string(with_depth ? "with depth, " : "without depth, ") +
-                   std::to_string(outliers) + " wrong");
-      const int n = 40;
-      MotionRefitOptions measuring;
-      measuring.measure_rotation = true;
-      double chi2 = 0.0, along = 0.0, along2 = 0.0, fit_along = 0.0;
-      for (int k = 0; k < n; ++k) {
-        const Scene s = MakeScene(TrueMotion(), 300, 0.5, outliers, 100 + k);
-        const PixelUndistorter und(Camera());
-        const Eigen::Matrix<double, 6, 1> sigma = Vec6(3e-4, 3e-4, 3e-4, 0.01, 0.01, 0.01);
-        Eigen::Matrix<double, 6, 1> offset = Eigen::Matrix<double, 6, 1>::Zero();
-        offset.head<3>() = offset_in_cam;
-        const CameraMotion prior = Prior(offset, sigma);
-        const MotionRefit r = RefitMotion(prior, s.matches, s.keypoints_a, s.keypoints_b,
-                                          with_depth ? s.depths : std::vector<float>{},
-                                          PredictionOptions(), und, measuring);
-        ASSERT_TRUE(r.ok) << r.reason;
-        const std::optional<ImuRotationMeasurement> m = ImuRotationFromFit(r, cam_from_imu);
-        ASSERT_TRUE(m.has_value());
-        const Eigen::Vector3d e = LogSO3(truth.conjugate() * m->imu_a_from_imu_b);
-        chi2 += e.dot(m->covariance.ldlt().solve(e));
-        along += e.dot(dir);
-        along2 += e.dot(dir) * e.dot(dir);
-        fit_along +=
-            LogSO3(truth.conjugate() * imu_a_from_imu_b(r.motion.cam_b_from_cam_a.rotation))
-                .dot(dir);
-      }
-      chi2 /= n;
-      along /= n;
-      fit_along /= n;
-      const double standard_error = std::sqrt((along2 / n - along * along) / n);
-      EXPECT_GT(chi2, 2.0);
-      // Without depth and with wrong matches the covariance is optimistic (mean 19.8, median 5.8:
-      // a few scenes land far in the direction where rotation and translation trade off); the
-      // bias filter's gate rejects those.
-      EXPECT_LT(chi2, with_depth || outliers == 0.0 ? 4.5 : 25.0);
-      EXPECT_LT(std::fabs(along), 3.0 * standard_error);
-      // The fit keeps part of the prior's 1.56e-3 rad offset.
-      EXPECT_GT(fit_along, 3.0 * standard_error);
-      EXPECT_GT(fit_along, 1e-4);
-    }
-  }
-  // No fit, no measurement.
-  MotionRefit failed;
-  EXPECT_FALSE(ImuRotationFromFit(failed, cam_from_imu).has_value());
-  EXPECT_FALSE(RotationObservationFromFit(failed, cam_from_imu, 0, 50'000'000).has_value());
-}
-
 // Why the rotation is measured from the final matches (MeasureRotationFromMatches): a first pass
 // searches windows around the prior's prediction, here a prior 4 mrad off in rotation (2.1 px,
 // about what a camera clock 10 ms off gives in a drone's turns) with 1.5 px boxes. A keypoint whose
@@ -503,7 +339,7 @@ TEST(MotionRefitTest, TheFirstPassLeansTowardsThePriorAndTheFinalMatchesDoNot) {
   double first_along = 0.0, along = 0.0, along2 = 0.0, chi2 = 0.0;
   int measured = 0;
   for (int k = 0; k < n; ++k) {
-    const Scene s = MakeScene(TrueMotion(), 300, 0.5, 0.0, 500 + k);
+    const MatchScene s = MakeMatchScene(TrueMotion(), 300, 0.5, 0.0, 500 + k);
     std::mt19937_64 rng(900 + k);
     std::uniform_real_distribution<double> u(0.0, 1.0);
     std::normal_distribution<double> gauss(0.0, 0.5);
@@ -559,7 +395,7 @@ TEST(MotionRefitTest, TheFirstPassLeansTowardsThePriorAndTheFinalMatchesDoNot) {
 // What is not measured: a fit that does not hold, fewer matches than min_inliers; a measurement
 // of an earlier call does not survive either.
 TEST(MotionRefitTest, MeasureRotationFromMatchesNeedsAFitAndEnoughMatches) {
-  const Scene s = MakeScene(TrueMotion(), 200, 0.5, 0.0);
+  const MatchScene s = MakeMatchScene(TrueMotion(), 200, 0.5, 0.0);
   const PixelUndistorter und(Camera());
   const CameraMotion prior =
       Prior(Eigen::Matrix<double, 6, 1>::Zero(), Vec6(3e-3, 3e-3, 3e-3, 0.01, 0.01, 0.01));
@@ -592,32 +428,6 @@ TEST(MotionRefitTest, MeasureRotationFromMatchesNeedsAFitAndEnoughMatches) {
 // A fit's rotation as an observation of the camera's clock offset: the measurement between the
 // given camera times; left out when its covariance is not positive definite (a degenerate fit)
 // or the times are not in order, so one such fit cannot fail a whole estimate.
-TEST(MotionRefitTest, RotationObservationFromFitLeavesOutDegenerateFits) {
-  const Rigid3d cam_from_imu(Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY())),
-                             Eigen::Vector3d(0.02, 0.0, -0.01));
-  MotionRefit fit;
-  fit.ok = true;
-  fit.rotation_from_matches_ok = true;
-  fit.rotation_from_matches = Eigen::Quaterniond(Eigen::AngleAxisd(0.01, Eigen::Vector3d::UnitZ()));
-  fit.rotation_from_matches_covariance = Eigen::Matrix3d::Identity() * 1e-8;
-  const std::optional<RotationObservation> o =
-      RotationObservationFromFit(fit, cam_from_imu, 100, 50'000'100);
-  ASSERT_TRUE(o.has_value());
-  EXPECT_EQ(o->t_a_ns, 100);
-  EXPECT_EQ(o->t_b_ns, 50'000'100);
-  const std::optional<ImuRotationMeasurement> m = ImuRotationFromFit(fit, cam_from_imu);
-  ASSERT_TRUE(m.has_value());
-  EXPECT_LT(LogSO3(o->imu_a_from_imu_b.conjugate() * m->imu_a_from_imu_b).norm(), 1e-15);
-  EXPECT_LT((o->covariance - m->covariance).norm(), 1e-20);
-  EXPECT_FALSE(RotationObservationFromFit(fit, cam_from_imu, 100, 100).has_value());
-  MotionRefit singular = fit;
-  singular.rotation_from_matches_covariance(2, 2) = 0.0;  // an axis the matches did not see
-  EXPECT_FALSE(RotationObservationFromFit(singular, cam_from_imu, 100, 50'000'100).has_value());
-  MotionRefit not_finite = fit;
-  not_finite.rotation_from_matches_covariance(0, 1) = std::nan("");
-  EXPECT_FALSE(RotationObservationFromFit(not_finite, cam_from_imu, 100, 50'000'100).has_value());
-}
-
 // The take-off of EuRoC MH_05 in miniature: the scene's readings far away (8-12 m, where a 2.4 cm
 // translation moves a point by about 1 px), and 14 corners along the top edge of a beam 0.6 m
 // away, above which the depth image has no reading (the background it occludes). Those corners
@@ -633,7 +443,7 @@ TEST(MotionRefitTest, DepthsReadAcrossAnOcclusionEdgeNoLongerSetTheTranslationsL
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::normal_distribution<double> gauss(0.0, 0.3);
   cv::Mat depth(c.height, c.width, CV_16UC1, cv::Scalar(0));  // 1000 units per metre
-  Scene s;
+  MatchScene s;
   auto add = [&](const Eigen::Vector2d& uv, double z_true, double z_read) {
     const Eigen::Vector3d q = truth * c.Unproject(uv, z_true);
     const Eigen::Vector2d pb(c.fx * q.x() / q.z() + c.cx + gauss(rng),
