@@ -8,13 +8,11 @@
 #include <opencv2/imgproc.hpp>
 
 #include "imumatch/core/error.h"
-#include "imumatch/core/statistics.h"
 #include "imumatch/core/time.h"
 #include "imumatch/imu/imu_integrator.h"
-#include "imumatch/matching/baseline_matchers.h"
+#include "imumatch/matching/depth_reading.h"
 #include "imumatch/matching/descriptor_distance.h"
 #include "imumatch/matching/field_of_view.h"
-#include "imumatch/matching/scene_depth.h"
 
 namespace imumatch {
 
@@ -216,62 +214,6 @@ void FrontEnd::Initialise(int64_t t_ns, FrontEndResult& result) {
   initialised_ = true;
 }
 
-std::vector<Match> FrontEnd::MatchPass(const CameraMotion& motion, const Features& features,
-                                       const std::vector<KeypointInfo>& ideal, const cv::Mat& image,
-                                       bool patch_look, const std::vector<Match>* first_pass,
-                                       SceneNearDepth& scene,
-                                       std::vector<KeypointPrediction>& predictions,
-                                       int& from_tracks) {
-  const Previous& prev = *previous_;
-  const PinholeCamera& camera = undistorter_.camera();
-  GridIndex grid;
-  grid.Build(ideal, camera.width, camera.height,
-             static_cast<float>(options_.guided.grid_cell_size));
-  GuidedCandidates candidates;  // B prepared once for the pilot and the search
-  PrepareGuidedCandidates(ideal, grid, DescriptorView::FromMat(features.descriptors), &candidates);
-  GuidedSearchScratch scratch;
-  const KeypointPredictor predictor(undistorter_, motion, options_.prediction);
-  if (first_pass != nullptr && options_.neighbour_depth.enabled) {
-    // Second pass: the first pass's near end, and each keypoint without depth along its
-    // neighbours' inverse depths where it has enough of them (no second pilot).
-    PredictKeypointsNearMatches(predictor.WithSceneNearEnd(scene), prev.ideal, prev.depths,
-                                *first_pass, ideal, options_.neighbour_depth, &predictions);
-  } else {
-    scene = PredictKeypointsInScene(predictor, prev.ideal, prev.depths,
-                                    DescriptorView::FromMat(prev.features.descriptors), ideal,
-                                    candidates, options_.guided, &predictions, &scratch);
-  }
-  std::vector<Match> out;
-  std::vector<KeypointPrediction> rest;
-  const std::vector<KeypointPrediction>* guided_predictions = &predictions;
-  from_tracks = 0;
-  if (options_.hybrid) {
-    const TrackingPyramid pa = TrackingPyramid::Build(prev.image, options_.klt.max_level);
-    const TrackingPyramid pb = TrackingPyramid::Build(image, options_.klt.max_level);
-    TrackResult tracks =
-        TrackSeeded(pa, pb, prev.features.keypoints, predictions, undistorter_, options_.klt);
-    rest = PredictionsOfFailedTracks(predictions, tracks);
-    guided_predictions = &rest;
-    from_tracks = static_cast<int>(tracks.tracks.size());
-    out = std::move(tracks.tracks);
-  }
-  MatchResult r = MatchGuided(*guided_predictions, prev.ideal,
-                              DescriptorView::FromMat(prev.features.descriptors), candidates,
-                              options_.guided, &scratch);
-  if (patch_look && options_.patch_second_look) {
-    MatchByPatch(*guided_predictions, prev.ideal, prev.features.keypoints,
-                 DescriptorView::FromMat(prev.features.descriptors), ideal, grid,
-                 features.keypoints, DescriptorView::FromMat(features.descriptors), prev.image,
-                 image, camera, options_.guided, options_.patch, &r);
-  }
-  if (options_.refine_subpixel) {
-    RefineMatches(prev.image, image, prev.features.keypoints, features.keypoints, predictions,
-                  camera, options_.subpixel, r.matches);
-  }
-  out.insert(out.end(), r.matches.begin(), r.matches.end());
-  return out;
-}
-
 void FrontEnd::UseFittedRotation(const MotionRefit& refit, int64_t t_a_ns, int64_t t_b_ns) {
   const size_t window = static_cast<size_t>(options_.time_offset_window);
   if (options_.keep_fitted_rotations || options_.estimate_time_offset) {
@@ -305,9 +247,12 @@ void FrontEnd::UseFittedRotation(const MotionRefit& refit, int64_t t_a_ns, int64
   bias_t_ns_ = t_b_ns;
 }
 
-FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
-  const auto start = SteadyClock::now();
-  const PinholeCamera& camera = undistorter_.camera();
+namespace {
+
+// The frame's image as 8-bit gray; InvalidArgument for an empty image, one of another size than
+// the camera's, a depth image not 16-bit or of another size, a time not after the previous frame.
+cv::Mat CheckedGray(const FrontEndFrame& frame, const PinholeCamera& camera,
+                    const std::optional<int64_t>& previous_t_ns) {
   IMUMATCH_CHECK(!frame.image.empty(), "empty image at t = " << frame.t_ns << " ns");
   IMUMATCH_CHECK(frame.image.cols == camera.width && frame.image.rows == camera.height,
                  "image of " << frame.image.cols << "x" << frame.image.rows
@@ -316,38 +261,33 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
   IMUMATCH_CHECK(frame.depth.empty() ||
                      (frame.depth.type() == CV_16UC1 && frame.depth.size() == frame.image.size()),
                  "depth at t = " << frame.t_ns << " ns must be 16-bit and of the image's size");
-  IMUMATCH_CHECK(!previous_ || frame.t_ns > previous_->t_ns,
+  IMUMATCH_CHECK(!previous_t_ns || frame.t_ns > *previous_t_ns,
                  "frame at t = " << frame.t_ns << " ns is not after the previous one");
-  FrontEndResult result;
-  result.t_ns = frame.t_ns;
   cv::Mat gray = frame.image;
   if (gray.channels() == 3) {
     cv::cvtColor(frame.image, gray, cv::COLOR_BGR2GRAY);
   }
   IMUMATCH_CHECK(gray.type() == CV_8UC1, "image at t = " << frame.t_ns << " ns must be 8-bit");
+  return gray;
+}
+
+}  // namespace
+
+FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
+  const auto start = SteadyClock::now();
+  const cv::Mat gray =
+      CheckedGray(frame, undistorter_.camera(),
+                  previous_ ? std::optional<int64_t>(previous_->t_ns) : std::optional<int64_t>());
+  FrontEndResult result;
+  result.t_ns = frame.t_ns;
 
   auto t0 = SteadyClock::now();
   Features features = ExtractFeatures(gray, options_.features, field_mask_);
   features.descriptors = PadBinaryDescriptors(features.descriptors);
-  const std::vector<KeypointInfo> ideal = ToIdealKeypointInfos(features.keypoints, undistorter_);
+  std::vector<KeypointInfo> ideal = ToIdealKeypointInfos(features.keypoints, undistorter_);
   result.extract_ms = MsSince(t0);
   result.keypoints = features.keypoints;
 
-  auto remember = [&](const Rigid3d& world_from_cam) {
-    Previous p;
-    p.t_ns = frame.t_ns;
-    p.image =
-        gray.data == frame.image.data ? gray.clone() : gray;  // the caller may reuse its buffers
-    p.depth = frame.depth.clone();
-    if (!frame.depth.empty()) {
-      p.depths = SampleDepths(frame.depth, camera.depth_scale, features.keypoints,
-                              options_.prediction.depth_sampling);
-    }
-    p.features = std::move(features);
-    p.ideal = ideal;
-    p.world_from_cam = world_from_cam;
-    previous_ = std::move(p);
-  };
   if (!initialised_ || !previous_) {
     result.status = FrameStatus::kFirst;
     if (!initialised_) Initialise(frame.t_ns, result);
@@ -355,17 +295,57 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
     result.world_from_cam = world_from_imu_ * cam_from_imu_.Inverse();
     result.velocity_in_world = velocity_;
     result.velocity_sigma = velocity_sigma_;
-    remember(result.world_from_cam);
+    Remember(frame, gray, std::move(features), std::move(ideal), result.world_from_cam);
     result.total_ms = MsSince(start);
     return result;
   }
   const Previous& prev = *previous_;
-  const double dt = NsToSeconds(frame.t_ns - prev.t_ns);
 
-  // The IMU's motion from the state at the previous frame.
   t0 = SteadyClock::now();
-  bool imu_ok = true;
   ImuPreintegration pim;
+  const bool imu_ok = MotionFromImu(prev.t_ns, frame.t_ns, result, pim);
+  result.motion_ms = MsSince(t0);
+
+  t0 = SteadyClock::now();
+  SceneNearDepth scene;  // where the first pass's segments start, kept by the second
+  FirstPass(features, ideal, gray, imu_ok, scene, result);
+  result.match1_ms = MsSince(t0);
+
+  t0 = SteadyClock::now();
+  const PoseFitError fit = FitPose(features, imu_ok, result);
+  result.pose_ms = MsSince(t0);
+
+  bool pnp_refused = false;  // PnP's pose not used (SecondPass)
+  if (options_.second_pass && result.pose.ok && result.status == FrameStatus::kGuided) {
+    t0 = SteadyClock::now();
+    pnp_refused = !SecondPass(features, ideal, gray, frame.t_ns, fit, scene, result);
+    result.match2_ms = MsSince(t0);
+  }
+
+  UpdateState(frame.t_ns, pim, imu_ok, pnp_refused, fit, result);
+  Remember(frame, gray, std::move(features), std::move(ideal), result.world_from_cam);
+  result.total_ms = MsSince(start);
+  return result;
+}
+
+void FrontEnd::Remember(const FrontEndFrame& frame, const cv::Mat& gray, Features features,
+                        std::vector<KeypointInfo> ideal, const Rigid3d& world_from_cam) {
+  Previous p;
+  p.t_ns = frame.t_ns;
+  p.image = gray.data == frame.image.data ? gray.clone() : gray;  // the caller may reuse buffers
+  p.depth = frame.depth.clone();
+  if (!frame.depth.empty()) {
+    p.depths = SampleDepths(frame.depth, undistorter_.camera().depth_scale, features.keypoints,
+                            options_.prediction.depth_sampling);
+  }
+  p.features = std::move(features);
+  p.ideal = std::move(ideal);
+  p.world_from_cam = world_from_cam;
+  previous_ = std::move(p);
+}
+
+bool FrontEnd::MotionFromImu(int64_t t_a_ns, int64_t t_b_ns, FrontEndResult& result,
+                             ImuPreintegration& pim) const {
   try {
     ImuStateAtFrame state;
     state.world_from_imu = world_from_imu_;
@@ -373,200 +353,26 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
     state.bias = bias_;
     CameraMotionOptions mo = options_.motion;
     mo.velocity_sigma = velocity_sigma_;
-    const double since = std::max(0.0, NsToSeconds(prev.t_ns - bias_t_ns_));
+    const double since = std::max(0.0, NsToSeconds(t_a_ns - bias_t_ns_));
     mo.gyro_bias_sigma =
         std::sqrt(gyro_bias_sigma_ * gyro_bias_sigma_ +
                   imu_params_.gyro_random_walk * imu_params_.gyro_random_walk * since);
     // The frames' stamps in the IMU's clock (estimate_time_offset; else the same).
-    const int64_t imu_a_ns = prev.t_ns + imu_offset_ns_, imu_b_ns = frame.t_ns + imu_offset_ns_;
+    const int64_t imu_a_ns = t_a_ns + imu_offset_ns_, imu_b_ns = t_b_ns + imu_offset_ns_;
     result.imu_motion =
         ComputeCameraMotion(imu_, imu_a_ns, imu_b_ns, state, imu_params_, cam_from_imu_, mo);
     pim = Preintegrate(imu_.Slice(imu_a_ns, imu_b_ns), bias_, imu_params_);
   } catch (const Error& e) {
-    imu_ok = false;
     result.event = std::string("IMU gap: ") + e.what();
+    return false;
   }
-  result.motion_ms = MsSince(t0);
+  return true;
+}
 
-  // First pass.
-  t0 = SteadyClock::now();
-  const bool enough_features =
-      prev.features.keypoints.size() >= 2 && features.keypoints.size() >= 2;
-  std::vector<KeypointPrediction> predictions;
-  SceneNearDepth scene;  // where the first pass's segments start, kept by the second
-  if (imu_ok && enough_features) {
-    result.matches_pass1 =
-        MatchPass(result.imu_motion, features, ideal, gray, !options_.second_pass, nullptr, scene,
-                  predictions, result.from_tracks);
-  }
-  result.status = FrameStatus::kGuided;
-  if (!imu_ok || !enough_features ||
-      static_cast<int>(result.matches_pass1.size()) < options_.min_matches) {
-    if (imu_ok && !enough_features) {
-      result.event = "too few features (previous frame " +
-                     std::to_string(prev.features.keypoints.size()) + ", this frame " +
-                     std::to_string(features.keypoints.size()) + ")";
-    } else if (imu_ok) {
-      result.event = "lost: " + std::to_string(result.matches_pass1.size()) +
-                     " guided matches (fewer than " + std::to_string(options_.min_matches) + ")";
-    }
-    result.status = FrameStatus::kBruteForce;
-    result.from_tracks = 0;
-    if (enough_features) {
-      BruteForceOptions bf;
-      result.matches_pass1 = MatchBruteForce(prev.features.descriptors, features.descriptors, bf);
-    } else {
-      result.matches_pass1.clear();
-    }
-  }
-  result.matches = result.matches_pass1;
-  result.match1_ms = MsSince(t0);
-
-  // Pose fit on the correspondences: PnP with the previous frame's depth, else epipolar.
-  t0 = SteadyClock::now();
-  std::vector<Eigen::Vector3d> points_a;
-  std::vector<Eigen::Vector2d> pixels_a, pixels_b, pixels_b3;
-  std::vector<double> depths_used;
-  for (const Match& m : result.matches) {
-    const cv::Point2f& ka = prev.features.keypoints[static_cast<size_t>(m.query_idx)].pt;
-    const Eigen::Vector2d pb = PositionInB(m, features.keypoints);
-    pixels_a.emplace_back(ka.x, ka.y);
-    pixels_b.push_back(pb);
-    if (prev.depths.empty()) continue;
-    const double z = prev.depths[static_cast<size_t>(m.query_idx)];
-    if (!options_.prediction.IsUsableDepth(z)) continue;
-    const Eigen::Vector2d ia = undistorter_.ToIdeal(Eigen::Vector2d(ka.x, ka.y));
-    points_a.push_back(z * Eigen::Vector3d(camera.IdealToNormalized(ia).homogeneous()));
-    pixels_b3.push_back(pb);
-    depths_used.push_back(z);
-  }
-  const Rigid3d guess = imu_ok ? result.imu_motion.cam_b_from_cam_a : Rigid3d();
-  if (static_cast<int>(points_a.size()) >= options_.pose.min_inliers) {
-    result.pose = FitPosePnp(points_a, pixels_b3, undistorter_, guess, options_.pose);
-    result.pose_from_depth = result.pose.ok;
-  }
-  if (!result.pose.ok && imu_ok) {
-    result.pose = FitPoseEpipolar(pixels_a, pixels_b, undistorter_, guess, options_.pose);
-  }
-  result.cam_from_prev = result.pose.ok ? result.pose.cam_b_from_cam_a : guess;
-  // The PnP fit's error: rms residual over sqrt(inliers), as an angle and at the median depth
-  // (the second pass's window and the velocity measurement's weight).
-  double fit_angle_sigma = 0.0, fit_translation_sigma = 0.0;
-  if (result.pose_from_depth) {
-    const double median_depth = UpperMedianInPlace(depths_used);
-    const double f = 0.5 * (camera.fx + camera.fy);
-    fit_angle_sigma = 2.0 * std::max(result.pose.rms_px, 0.5) / f /
-                      std::sqrt(static_cast<double>(result.pose.inliers));
-    fit_translation_sigma = fit_angle_sigma * median_depth;
-  }
-  result.pose_ms = MsSince(t0);
-
-  // Second pass: predictions from the fitted pose, windows from its residual.
-  bool pnp_refused = false;  // PnP's pose not used (below)
-  if (options_.second_pass && result.pose.ok && result.status == FrameStatus::kGuided) {
-    t0 = SteadyClock::now();
-    CameraMotion refined = result.imu_motion;
-    refined.cam_b_from_cam_a = result.pose.cam_b_from_cam_a;
-    if (result.pose_from_depth) {
-      refined.covariance.setZero();
-      refined.covariance.topLeftCorner<3, 3>().diagonal().setConstant(fit_angle_sigma *
-                                                                      fit_angle_sigma);
-      refined.covariance.bottomRightCorner<3, 3>().diagonal().setConstant(fit_translation_sigma *
-                                                                          fit_translation_sigma);
-    }
-    // The windows: the motion and covariance RefitMotion finds from the IMU's prior and the first
-    // pass's matches when it can; else the pose fit's with the covariance above.
-    // The rotation the matches alone show is measured from the second pass's (below).
-    Rigid3d fitted = result.pose.cam_b_from_cam_a;
-    const std::vector<float> fit_depths = FitDepths(
-        prev.depth, camera.depth_scale, prev.features.keypoints, prev.depths, options_.refit);
-    MotionRefitOptions refit_options = options_.refit;
-    refit_options.measure_rotation = false;
-    MotionRefit refit = RefitMotion(result.imu_motion, result.matches_pass1,
-                                    prev.features.keypoints, features.keypoints, fit_depths,
-                                    options_.prediction, undistorter_, refit_options);
-    // Where the motion fit of all matches did not converge, PnP's pose on the ~100 matches with
-    // depth would be the frame's motion, its velocity and the second pass's windows. It must then
-    // agree with the IMU's motion as the fit must, under both covariances: at MH_05's take-off
-    // (pair 0 -> 1, 0.2 mm of motion, a translation direction the matches cannot tell) the fit
-    // wandered and PnP read the wrong depths there as 20 mm of motion. A fit that failed
-    // otherwise (beyond the prior, residuals beyond the keypoints' noise) says the IMU's motion
-    // is off (after an IMU gap, its attitude): then PnP stands.
-    if (refit.not_converged && result.pose_from_depth) {
-      CameraMotion both = result.imu_motion;
-      both.covariance += refined.covariance;  // refined: PnP's pose and covariance (above)
-      const double m2 = SquaredMahalanobis(both, result.pose.cam_b_from_cam_a);
-      const double gate = MotionAgreementGate(options_.refit.agreement_probability);
-      pnp_refused = !(m2 <= gate);
-      if (pnp_refused) {
-        result.cam_from_prev = result.imu_motion.cam_b_from_cam_a;
-        std::ostringstream note;
-        note << refit.reason << "; PnP pose disagrees with the IMU's motion (squared Mahalanobis "
-             << "distance " << std::setprecision(3) << m2 << " > " << gate
-             << "): the IMU's motion kept, no second pass";
-        result.event = result.event.empty() ? note.str() : result.event + "; " + note.str();
-      }
-    }
-    if (refit.ok) {
-      refined = refit.motion;
-      fitted = refit.motion.cam_b_from_cam_a;
-      // Where frame A has depth, the estimated motion as well: the fit of all the first pass's
-      // matches (reprojection rows where A has depth, epipolar rows elsewhere) with the IMU's
-      // motion as its prior, rather than PnP on the matches with depth alone (RANSAC on about
-      // 100 of MH_05's 800 matches per frame). On MH_05's 35 pairs with depth, ORB, relative
-      // pose error RMSE per frame: rotation 0.071 -> 0.0076 deg, translation 12.9 -> 1.4 mm.
-      // Without depth the epipolar fit stays: the fit's rotation there carries the IMU
-      // translation's error (0.0035 -> 0.015 deg on the 164 pairs without depth).
-      if (result.pose_from_depth) result.cam_from_prev = fitted;
-    }
-    if (!pnp_refused) {
-      std::vector<KeypointPrediction> predictions2;
-      int tracks2 = 0;
-      std::vector<Match> second = MatchPass(refined, features, ideal, gray, true,
-                                            &result.matches_pass1, scene, predictions2, tracks2);
-      // Keep the matches the fitted geometry explains: reprojection (with depth) or epipolar
-      // distance (without) within the fit's inlier threshold, in ideal pixels.
-      const Eigen::Matrix3d rf = fitted.rotation.toRotationMatrix();
-      const Eigen::Vector3d tf = fitted.translation;
-      const double f = 0.5 * (camera.fx + camera.fy);
-      result.matches.clear();
-      result.from_tracks = 0;
-      for (const Match& m : second) {
-        const cv::Point2f& ka = prev.features.keypoints[static_cast<size_t>(m.query_idx)].pt;
-        const Eigen::Vector2d pb = PositionInB(m, features.keypoints);
-        const Eigen::Vector2d ia = undistorter_.ToIdeal(Eigen::Vector2d(ka.x, ka.y));
-        const Eigen::Vector2d ib = undistorter_.ToIdeal(pb);
-        const Eigen::Vector3d xa = camera.IdealToNormalized(ia).homogeneous();
-        const Eigen::Vector3d xb = camera.IdealToNormalized(ib).homogeneous();
-        double residual = 0.0;
-        const double z =
-            prev.depths.empty() ? std::nan("") : prev.depths[static_cast<size_t>(m.query_idx)];
-        if (result.pose_from_depth && options_.prediction.IsUsableDepth(z)) {
-          const Eigen::Vector3d q = rf * (xa * z) + tf;
-          residual = f * (q.head<2>() / q.z() - xb.head<2>()).norm();
-        } else {
-          const Eigen::Vector3d line = tf.cross(rf * xa);
-          const double norm = std::hypot(line.x(), line.y());
-          residual = norm > 0.0 ? f * std::fabs(xb.dot(line)) / norm : 0.0;
-        }
-        if (!(residual <= options_.pose.ransac_px)) continue;
-        result.matches.push_back(m);
-        result.from_tracks += m.train_idx < 0 ? 1 : 0;
-      }
-      if (refit.ok && options_.refit.measure_rotation) {
-        // From the matches found in the fit's windows: the first pass's, found in the IMU's, lean
-        // towards its rotation (MeasureRotationFromMatches).
-        MeasureRotationFromMatches(result.imu_motion, result.matches, prev.features.keypoints,
-                                   features.keypoints, fit_depths, options_.prediction,
-                                   undistorter_, options_.refit, &refit);
-        UseFittedRotation(refit, prev.t_ns, frame.t_ns);
-      }
-      result.second_pass = true;
-    }
-    result.match2_ms = MsSince(t0);
-  }
-
-  // State at this frame.
+void FrontEnd::UpdateState(int64_t t_ns, const ImuPreintegration& pim, bool imu_ok,
+                           bool pnp_refused, const PoseFitError& fit, FrontEndResult& result) {
+  const Previous& prev = *previous_;
+  const double dt = NsToSeconds(t_ns - prev.t_ns);
   result.world_from_cam = prev.world_from_cam * result.cam_from_prev.Inverse();
   const Rigid3d world_from_imu_b = result.world_from_cam * cam_from_imu_;
   Eigen::Vector3d v = velocity_;
@@ -583,7 +389,7 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
     // Since the last fix: the accelerometer bias's error integrated (linear in time) and the
     // white noise's (a random walk). Summed per frame as a random walk, the bias's share was
     // sqrt(dt / t) of this: 12x too small after 8 s without depth at 20 Hz.
-    const double since_fix = std::max(0.0, NsToSeconds(frame.t_ns - velocity_fix_t_ns_));
+    const double since_fix = std::max(0.0, NsToSeconds(t_ns - velocity_fix_t_ns_));
     sigma =
         std::sqrt(velocity_fix_sigma_ * velocity_fix_sigma_ +
                   std::pow(options_.motion.accel_bias_sigma * since_fix, 2) +
@@ -596,18 +402,18 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
       const Eigen::Vector3d va =
           (world_from_imu_b.translation - pa - ra * pim.delta_position - 0.5 * g * dt * dt) / dt;
       const Eigen::Vector3d vb = va + ra * pim.delta_velocity + g * dt;
-      const double sm = std::max(0.002, fit_translation_sigma) / dt;
+      const double sm = std::max(0.002, fit.translation_sigma) / dt;
       const double wp = 1.0 / (sigma * sigma), wm = 1.0 / (sm * sm);
       v = (wp * v + wm * vb) / (wp + wm);
       sigma = std::sqrt(1.0 / (wp + wm));
       velocity_fix_sigma_ = std::max(options_.min_velocity_sigma, sigma);
-      velocity_fix_t_ns_ = frame.t_ns;
+      velocity_fix_t_ns_ = t_ns;
     }
   }
   if (result.status == FrameStatus::kBruteForce || !imu_ok) {
     sigma = std::max(sigma, options_.unknown_velocity_sigma);  // re-initialised
     velocity_fix_sigma_ = sigma;
-    velocity_fix_t_ns_ = frame.t_ns;
+    velocity_fix_t_ns_ = t_ns;
   }
   world_from_imu_ = Rigid3d(attitude, world_from_imu_b.translation);
   velocity_ = v;
@@ -615,9 +421,6 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
   result.velocity_in_world = velocity_;
   result.velocity_sigma = velocity_sigma_;
   result.has_state = true;
-  remember(result.world_from_cam);
-  result.total_ms = MsSince(start);
-  return result;
 }
 
 }  // namespace imumatch

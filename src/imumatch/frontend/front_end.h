@@ -17,6 +17,7 @@
 #include "imumatch/imu/camera_motion.h"
 #include "imumatch/imu/gyro_bias_filter.h"
 #include "imumatch/imu/imu_buffer.h"
+#include "imumatch/imu/imu_integrator.h"
 #include "imumatch/imu/imu_params.h"
 #include "imumatch/imu/time_offset.h"
 #include "imumatch/matching/guided_matcher.h"
@@ -195,7 +196,33 @@ class FrontEnd {
     std::vector<float> depths;
     Rigid3d world_from_cam;
   };
+  // The PnP fit's error (zero without a fit with depth): an angle (rad) and a translation (m).
+  struct PoseFitError {
+    double angle_sigma = 0.0, translation_sigma = 0.0;
+  };
   void Initialise(int64_t t_ns, FrontEndResult& result);
+  // Process's stages, in order, each on the frame against previous_ and filling its part of result.
+  // The IMU's motion from the previous frame's state (result.imu_motion) and the samples'
+  // preintegration; false, with result.event, when the IMU cannot give it (a gap).
+  bool MotionFromImu(int64_t t_a_ns, int64_t t_b_ns, FrontEndResult& result,
+                     ImuPreintegration& pim) const;
+  // Guided matching in the IMU's windows; brute force when the IMU failed, features are too few
+  // or the matches fewer than options_.min_matches (result.status says which).
+  void FirstPass(const Features& features, const std::vector<KeypointInfo>& ideal,
+                 const cv::Mat& gray, bool imu_ok, SceneNearDepth& scene, FrontEndResult& result);
+  // PnP on the matches with depth, else the epipolar fit: result.pose, cam_from_prev.
+  PoseFitError FitPose(const Features& features, bool imu_ok, FrontEndResult& result) const;
+  // The motion refit and the second pass in its windows; false when PnP's pose was refused
+  // (it disagrees with the IMU's where the refit did not converge): then no second pass.
+  bool SecondPass(const Features& features, const std::vector<KeypointInfo>& ideal,
+                  const cv::Mat& gray, int64_t t_ns, const PoseFitError& fit, SceneNearDepth& scene,
+                  FrontEndResult& result);
+  // The state at this frame: pose, the gyro's attitude, velocity and its sigma.
+  void UpdateState(int64_t t_ns, const ImuPreintegration& pim, bool imu_ok, bool pnp_refused,
+                   const PoseFitError& fit, FrontEndResult& result);
+  // The frame becomes previous_.
+  void Remember(const FrontEndFrame& frame, const cv::Mat& gray, Features features,
+                std::vector<KeypointInfo> ideal, const Rigid3d& world_from_cam);
   // Feeds the rotation the refit measured between t_a and t_b to the gyro bias filter (when the
   // bias is learnt) and takes its bias for the next frames.
   void UseFittedRotation(const MotionRefit& refit, int64_t t_a_ns, int64_t t_b_ns);

@@ -45,5 +45,56 @@ TEST(SecondPassTest, WindowsShrinkToTheFit) {
   EXPECT_THROW(SecondPassPredictor(und, r, po, scene), InvalidArgument);
 }
 
+// B's pixel of A's keypoint uv_a at depth z (KinectDefault: no lens distortion).
+Eigen::Vector2d InB(const Rigid3d& cam_b_from_cam_a, const Eigen::Vector2d& uv_a, double z) {
+  const PinholeCamera c = Camera();
+  const Eigen::Vector3d p = cam_b_from_cam_a * c.Unproject(uv_a, z);
+  return Eigen::Vector2d(c.fx * p.x() / p.z() + c.cx, c.fy * p.y() / p.z() + c.cy);
+}
+
+TEST(SecondPassTest, MatchesExplainedByFitAreThoseWithinTheThreshold) {
+  ASSERT_EQ(Camera().fx, Camera().fy);  // pixel distances = f x normalised distances
+  const PixelUndistorter und(Camera());
+  const Rigid3d motion = TrueMotion();
+  const Eigen::Vector2d ua(300.0, 200.0), ua2(420.0, 310.0);
+  const Eigen::Vector2d near = InB(motion, ua, 2.0);
+  const Eigen::Vector2d along = (InB(motion, ua, 5.0) - near).normalized();  // epipolar line
+  const Eigen::Vector2d across(-along.y(), along.x());
+  std::vector<cv::KeyPoint> ka, kb;
+  std::vector<Match> matches;
+  std::vector<float> depths;
+  auto add = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b, float z) {
+    AddMatch(a, b, &ka, &kb, &matches);
+    depths.push_back(z);
+  };
+  add(ua, near, 2.0f);                                // 0: exact
+  add(ua, near + 0.9 * along, 2.0f);                  // 1: 0.9 px from the reprojection
+  add(ua, near + 3.0 * along, 2.0f);                  // 2: 3 px along the line
+  add(ua, near + 1.1 * across, std::nanf(""));        // 3: no depth, 1.1 px off the line
+  add(ua, near + 0.9 * across + 40.0 * along, 0.0f);  // 4: zero depth, 0.9 px off
+  add(ua2, InB(motion, ua2, 7.0) + Eigen::Vector2d(0.5, 0.3), 1000.0f);  // 5: beyond max_depth
+  const PredictionOptions po;
+  auto kept = [&](const std::vector<Match>& ms) {
+    std::vector<int> idx;
+    for (const Match& m : ms) idx.push_back(m.query_idx);
+    return idx;
+  };
+  EXPECT_EQ(kept(MatchesExplainedByFit(matches, motion, true, ka, depths, kb, und, po, 1.0)),
+            (std::vector<int>{0, 1, 4, 5}));
+  // Without depth every match is judged by its distance from the line: 2 is on it.
+  EXPECT_EQ(kept(MatchesExplainedByFit(matches, motion, false, ka, depths, kb, und, po, 1.0)),
+            (std::vector<int>{0, 1, 2, 4, 5}));
+  EXPECT_EQ(kept(MatchesExplainedByFit(matches, motion, true, ka, {}, kb, und, po, 1.0)),
+            (std::vector<int>{0, 1, 2, 4, 5}));
+  // A wider threshold keeps 3 (1.1 px off the line) and 2 (3 px from the reprojection).
+  EXPECT_EQ(MatchesExplainedByFit(matches, motion, true, ka, depths, kb, und, po, 3.5).size(),
+            matches.size());
+  // A motion without translation draws no epipolar line: matches without depth all stay.
+  const Rigid3d turn(motion.rotation, Eigen::Vector3d::Zero());
+  std::vector<float> none(depths.size(), std::nanf(""));
+  EXPECT_EQ(MatchesExplainedByFit(matches, turn, true, ka, none, kb, und, po, 1.0).size(),
+            matches.size());
+}
+
 }  // namespace
 }  // namespace imumatch
