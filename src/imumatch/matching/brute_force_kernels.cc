@@ -8,6 +8,7 @@
 #include <string>
 
 #include "imumatch/core/error.h"
+#include "imumatch/matching/brute_force_l2.h"
 
 #if defined(__x86_64__) || defined(__i386__)
 #include <immintrin.h>
@@ -438,118 +439,6 @@ void HammingAvx2(const DescriptorView& a, const DescriptorView& b, Nearest2& out
   kByWords[std::clamp(a.bytes / 8, 1, 8) - 1](a, b, out);
 }
 
-// L2 in one summation order on every path, so that all paths give the same bits: 16 partial sums,
-// element k into partial k mod 16 (a multiply, then an add: no fused multiply-add, which the
-// scalar path would have to emulate slowly) in increasing k, then the fixed tree
-// ((p0+p8)+(p4+p12)) + ((p2+p10)+(p6+p14)) + ... below. AVX-512 holds the 16 partials in one
-// register, AVX2 in two, the scalar path in an array.
-inline float ReducePartials(const float* p) {
-  float h[8];
-  for (int l = 0; l < 8; ++l) h[l] = p[l] + p[l + 8];
-  float g[4];
-  for (int l = 0; l < 4; ++l) g[l] = h[l] + h[l + 4];
-  return (g[0] + g[2]) + (g[1] + g[3]);
-}
-
-float L2Canonical(const float* a, const float* b, int dims) {
-  float p[16] = {0};
-  for (int k = 0; k < dims; ++k) {
-    const float d = a[k] - b[k];
-    const float dd = d * d;
-    p[k % 16] = p[k % 16] + dd;
-  }
-  return ReducePartials(p);
-}
-
-void L2Scalar(const DescriptorView& a, const DescriptorView& b, Nearest2& out) {
-  const int dims = a.bytes / 4;
-  for (int i = 0; i < a.rows; ++i) {
-    const float* q = reinterpret_cast<const float*>(a.Row(i));
-    for (int j = 0; j < b.rows; ++j) {
-      Update(L2Canonical(q, reinterpret_cast<const float*>(b.Row(j)), dims), j, out.best[i],
-             out.second[i], out.best_idx[i]);
-    }
-  }
-}
-
-// Tail elements (k >= the last multiple of 16) go into their partials after the vector part, in
-// increasing k: the same order as L2Canonical.
-inline void AddTail(const float* q, const float* t, int from, int dims, float* p) {
-  for (int k = from; k < dims; ++k) {
-    const float d = q[k] - t[k];
-    const float dd = d * d;
-    p[k % 16] = p[k % 16] + dd;
-  }
-}
-
-__attribute__((target("avx512f"))) void L2Avx512(const DescriptorView& a, const DescriptorView& b,
-                                                 Nearest2& out) {
-  const int dims = a.bytes / 4, vec = dims - dims % 16;
-  alignas(64) float p[4][16];
-  for (int i0 = 0; i0 < a.rows; i0 += kQueryBlock) {
-    const int nq = std::min(kQueryBlock, a.rows - i0);
-    const float* q[kQueryBlock];
-    for (int u = 0; u < kQueryBlock; ++u) {
-      q[u] = reinterpret_cast<const float*>(a.Row(i0 + std::min(u, nq - 1)));
-    }
-    for (int j = 0; j < b.rows; ++j) {
-      const float* t = reinterpret_cast<const float*>(b.Row(j));
-      __m512 s0 = _mm512_setzero_ps(), s1 = s0, s2 = s0, s3 = s0;
-      for (int k = 0; k < vec; k += 16) {
-        const __m512 tv = _mm512_loadu_ps(t + k);
-        const __m512 d0 = _mm512_sub_ps(_mm512_loadu_ps(q[0] + k), tv);
-        const __m512 d1 = _mm512_sub_ps(_mm512_loadu_ps(q[1] + k), tv);
-        const __m512 d2 = _mm512_sub_ps(_mm512_loadu_ps(q[2] + k), tv);
-        const __m512 d3 = _mm512_sub_ps(_mm512_loadu_ps(q[3] + k), tv);
-        s0 = _mm512_add_ps(s0, _mm512_mul_ps(d0, d0));
-        s1 = _mm512_add_ps(s1, _mm512_mul_ps(d1, d1));
-        s2 = _mm512_add_ps(s2, _mm512_mul_ps(d2, d2));
-        s3 = _mm512_add_ps(s3, _mm512_mul_ps(d3, d3));
-      }
-      _mm512_store_ps(p[0], s0);
-      _mm512_store_ps(p[1], s1);
-      _mm512_store_ps(p[2], s2);
-      _mm512_store_ps(p[3], s3);
-      for (int u = 0; u < nq; ++u) {
-        AddTail(q[u], t, vec, dims, p[u]);
-        Update(ReducePartials(p[u]), j, out.best[i0 + u], out.second[i0 + u], out.best_idx[i0 + u]);
-      }
-    }
-  }
-}
-
-__attribute__((target("avx2"))) void L2Avx2(const DescriptorView& a, const DescriptorView& b,
-                                            Nearest2& out) {
-  const int dims = a.bytes / 4, vec = dims - dims % 16;
-  alignas(32) float p[4][16];
-  for (int i0 = 0; i0 < a.rows; i0 += kQueryBlock) {
-    const int nq = std::min(kQueryBlock, a.rows - i0);
-    const float* q[kQueryBlock];
-    for (int u = 0; u < kQueryBlock; ++u) {
-      q[u] = reinterpret_cast<const float*>(a.Row(i0 + std::min(u, nq - 1)));
-    }
-    for (int j = 0; j < b.rows; ++j) {
-      const float* t = reinterpret_cast<const float*>(b.Row(j));
-      __m256 lo[4], hi[4];
-      for (int u = 0; u < 4; ++u) lo[u] = hi[u] = _mm256_setzero_ps();
-      for (int k = 0; k < vec; k += 16) {
-        const __m256 tl = _mm256_loadu_ps(t + k), th = _mm256_loadu_ps(t + k + 8);
-        for (int u = 0; u < 4; ++u) {
-          const __m256 dl = _mm256_sub_ps(_mm256_loadu_ps(q[u] + k), tl);
-          const __m256 dh = _mm256_sub_ps(_mm256_loadu_ps(q[u] + k + 8), th);
-          lo[u] = _mm256_add_ps(lo[u], _mm256_mul_ps(dl, dl));
-          hi[u] = _mm256_add_ps(hi[u], _mm256_mul_ps(dh, dh));
-        }
-      }
-      for (int u = 0; u < nq; ++u) {
-        _mm256_store_ps(p[u], lo[u]);
-        _mm256_store_ps(p[u] + 8, hi[u]);
-        AddTail(q[u], t, vec, dims, p[u]);
-        Update(ReducePartials(p[u]), j, out.best[i0 + u], out.second[i0 + u], out.best_idx[i0 + u]);
-      }
-    }
-  }
-}
 #endif
 
 bool CpuHas(BruteForceKernel k) {
@@ -600,10 +489,10 @@ void NearestTwo(const DescriptorView& a, const DescriptorView& b, BruteForceKern
     return HammingPortable(a, b, out);
   }
 #if IMUMATCH_BF_X86
-  if (kernel == BruteForceKernel::kAvx512) return L2Avx512(a, b, out);
-  if (kernel == BruteForceKernel::kAvx2) return L2Avx2(a, b, out);
+  if (kernel == BruteForceKernel::kAvx512) return NearestTwoL2Avx512(a, b, out);
+  if (kernel == BruteForceKernel::kAvx2) return NearestTwoL2Avx2(a, b, out);
 #endif
-  L2Scalar(a, b, out);
+  NearestTwoL2Scalar(a, b, out);
 }
 
 std::vector<BruteForceKernel> AvailableBruteForceKernels() {

@@ -16,9 +16,11 @@ namespace imumatch {
 enum class BruteForceKernel {
   kAuto,
   kScalar,  // portable C++ (no POPCNT instruction)
-  kPopcnt,  // 64-bit POPCNT, 4 queries per pass; L2: SSE2 (Hamming only differs from scalar)
-  kAvx2,    // Hamming: nibble-table popcount (PSHUFB) over 4 descriptors per register; L2: AVX2+FMA
-  kAvx512,  // Hamming: VPOPCNTQ over 8 descriptors per register; L2: AVX-512F FMA
+  kPopcnt,  // 64-bit POPCNT, 4 queries per pass; L2: the portable path (Hamming only differs)
+  kAvx2,    // Hamming: nibble-table popcount (PSHUFB) over 4 descriptors per register; L2: AVX2,
+            // 8 train rows per pass
+  kAvx512,  // Hamming: VPOPCNTQ over 8 descriptors per register, 2 queries per pass; L2:
+            // AVX-512F, 16 train rows per pass
 };
 const char* ToString(BruteForceKernel kernel);
 // The paths this CPU can run, kScalar first, the fastest last (what kAuto uses).
@@ -34,11 +36,13 @@ struct Nearest2 {
   void Reset(int n);
 };
 
-// Every query row of a against every row of b, blocked over 4 queries x 256-row chunks of b (a
-// chunk stays in L1, each loaded b row is compared with 4 queries held in registers); Hamming
-// with AVX-512 VPOPCNTQ, AVX2 nibble-table popcount or 64-bit POPCNT, L2 with AVX-512F or
-// AVX2+FMA in one fixed summation order, so that every path gives the same bits as the portable
-// one. kAuto: the fastest path the CPU has; a forced path the CPU lacks throws InvalidArgument.
+// Every query row of a against every row of b. Hamming: AVX-512 VPOPCNTQ or AVX2 nibble-table
+// popcount over B transposed into blocks of train rows (each lane keeps its own nearest two), or
+// 64-bit POPCNT blocked over 4 queries x 256-row chunks of b (a chunk stays in L1). L2: AVX-512F
+// or AVX2 over blocks of 16 / 8 train rows that stay in L1 while every query passes over them,
+// in one fixed summation order without fused multiply-adds (brute_force_l2.h), so that every
+// path gives the same bits as the portable one. kAuto: the fastest path the CPU has; a forced
+// path the CPU lacks throws InvalidArgument.
 void NearestTwo(const DescriptorView& a, const DescriptorView& b, BruteForceKernel kernel,
                 Nearest2& out);
 
