@@ -62,19 +62,6 @@ namespace {
 constexpr int kQueryBlock = 4;
 constexpr int kTrainChunk = 256;
 
-__attribute__((always_inline)) inline void Update(float d, int j, float& best, float& second,
-                                                  int& best_idx) {
-  if (d < second) {
-    if (d < best) {
-      second = best;
-      best = d;
-      best_idx = j;
-    } else {
-      second = d;
-    }
-  }
-}
-
 __attribute__((always_inline)) inline uint64_t Load64(const uint8_t* p) {
   uint64_t v;
   std::memcpy(&v, p, 8);
@@ -117,7 +104,7 @@ __attribute__((always_inline)) inline void HammingBlockKernel(const DescriptorVi
           int d = 0;
 #pragma GCC unroll 8
           for (int w = 0; w < W; ++w) d += __builtin_popcountll(q[u][w] ^ t[w]);
-          Update(static_cast<float>(d), j, best[u], second[u], idx[u]);
+          UpdateNearest2(static_cast<float>(d), j, best[u], second[u], idx[u]);
         }
       }
       for (int u = 0; u < kQueryBlock; ++u) {
@@ -129,7 +116,7 @@ __attribute__((always_inline)) inline void HammingBlockKernel(const DescriptorVi
     for (; i < n; ++i) {
       for (int j = j0; j < j1; ++j) {
         const float d = static_cast<float>(HammingDistance(a.Row(i), b.Row(j), W * 8));
-        Update(d, j, out.best[i], out.second[i], out.best_idx[i]);
+        UpdateNearest2(d, j, out.best[i], out.second[i], out.best_idx[i]);
       }
     }
   }
@@ -143,7 +130,8 @@ __attribute__((always_inline)) inline void GenericKernel(const DescriptorView& a
     const int j1 = std::min(b.rows, j0 + kTrainChunk);
     for (int i = 0; i < a.rows; ++i) {
       for (int j = j0; j < j1; ++j) {
-        Update(fn(a.Row(i), b.Row(j), a.bytes), j, out.best[i], out.second[i], out.best_idx[i]);
+        UpdateNearest2(fn(a.Row(i), b.Row(j), a.bytes), j, out.best[i], out.second[i],
+                       out.best_idx[i]);
       }
     }
   }
@@ -196,10 +184,10 @@ __attribute__((target("popcnt"))) void Hamming32Popcnt(const DescriptorView& a,
                        __builtin_popcountll(c2 ^ t2) + __builtin_popcountll(c3 ^ t3);
         const int e3 = __builtin_popcountll(d0 ^ t0) + __builtin_popcountll(d1 ^ t1) +
                        __builtin_popcountll(d2 ^ t2) + __builtin_popcountll(d3 ^ t3);
-        Update(static_cast<float>(e0), j, best0, sec0, idx0);
-        Update(static_cast<float>(e1), j, best1, sec1, idx1);
-        Update(static_cast<float>(e2), j, best2, sec2, idx2);
-        Update(static_cast<float>(e3), j, best3, sec3, idx3);
+        UpdateNearest2(static_cast<float>(e0), j, best0, sec0, idx0);
+        UpdateNearest2(static_cast<float>(e1), j, best1, sec1, idx1);
+        UpdateNearest2(static_cast<float>(e2), j, best2, sec2, idx2);
+        UpdateNearest2(static_cast<float>(e3), j, best3, sec3, idx3);
       }
       out.best[i] = best0, out.best[i + 1] = best1, out.best[i + 2] = best2,
       out.best[i + 3] = best3;
@@ -217,7 +205,7 @@ __attribute__((target("popcnt"))) void Hamming32Popcnt(const DescriptorView& a,
                       __builtin_popcountll(a1 ^ Load64(row + 8)) +
                       __builtin_popcountll(a2 ^ Load64(row + 16)) +
                       __builtin_popcountll(a3 ^ Load64(row + 24));
-        Update(static_cast<float>(e), j, out.best[i], out.second[i], out.best_idx[i]);
+        UpdateNearest2(static_cast<float>(e), j, out.best[i], out.second[i], out.best_idx[i]);
       }
     }
   }

@@ -14,19 +14,6 @@
 namespace imumatch {
 namespace {
 
-__attribute__((always_inline)) inline void Update(float d, int j, float& best, float& second,
-                                                  int& best_idx) {
-  if (d < second) {
-    if (d < best) {
-      second = best;
-      best = d;
-      best_idx = j;
-    } else {
-      second = d;
-    }
-  }
-}
-
 // L2Canonical's tree (brute_force_l2.h). AVX-512 holds the 16 partials in one register, AVX2 in
 // two, the scalar path in an array.
 inline float ReducePartials(const float* p) {
@@ -65,8 +52,8 @@ void NearestTwoL2Scalar(const DescriptorView& a, const DescriptorView& b, Neares
   for (int i = 0; i < a.rows; ++i) {
     const float* q = reinterpret_cast<const float*>(a.Row(i));
     for (int j = 0; j < b.rows; ++j) {
-      Update(L2Canonical(q, reinterpret_cast<const float*>(b.Row(j)), dims), j, out.best[i],
-             out.second[i], out.best_idx[i]);
+      UpdateNearest2(L2Canonical(q, reinterpret_cast<const float*>(b.Row(j)), dims), j, out.best[i],
+                     out.second[i], out.best_idx[i]);
     }
   }
 }
@@ -180,25 +167,7 @@ __attribute__((target("avx512f"))) void NearestTwoL2Avx512(const DescriptorView&
       _mm512_storeu_si512(ip, _mm512_mask_mov_epi32(_mm512_loadu_si512(ip), lt, jv));
     }
   }
-  for (int i = 0; i < n; ++i) {
-    const float* bp = best_s.data() + static_cast<size_t>(i) * T;
-    const float* sp = second_s.data() + static_cast<size_t>(i) * T;
-    const int32_t* ip = idx_s.data() + static_cast<size_t>(i) * T;
-    int star = -1;
-    for (int l = 0; l < T; ++l) {
-      if (ip[l] < 0) continue;
-      if (star < 0 || bp[l] < bp[star] || (bp[l] == bp[star] && ip[l] < ip[star])) star = l;
-    }
-    if (star < 0) continue;
-    float sec = std::numeric_limits<float>::infinity();
-    for (int l = 0; l < T; ++l) {
-      sec = std::min(sec, sp[l]);
-      if (l != star) sec = std::min(sec, bp[l]);
-    }
-    out.best[i] = bp[star];
-    out.best_idx[i] = ip[star];
-    out.second[i] = sec;
-  }
+  MergeFloatLanes(best_s, second_s, idx_s, T, out);
 }
 
 namespace {

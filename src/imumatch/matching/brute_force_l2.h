@@ -3,8 +3,9 @@
 #include "imumatch/matching/brute_force_kernels.h"
 #include "imumatch/matching/descriptor_distance.h"
 
-// The squared-L2 paths of NearestTwo (brute_force_kernels.h), internal to the matching library:
-// every path sums in one order (L2Canonical's), so that all give the same bits.
+// The squared-L2 paths of NearestTwo (brute_force_kernels.h) and the nearest-two update that all
+// its paths share, internal to the matching library. Every L2 path sums in one order
+// (L2Canonical's), so that all give the same bits.
 
 #if defined(__x86_64__) || defined(__i386__)
 #define IMUMATCH_BF_L2_X86 1
@@ -13,6 +14,21 @@
 #endif
 
 namespace imumatch {
+
+// One train row's cost d (index j) into a query's nearest two: what every path keeps, ties to the
+// earliest index.
+__attribute__((always_inline)) inline void UpdateNearest2(float d, int j, float& best,
+                                                          float& second, int& best_idx) {
+  if (d < second) {
+    if (d < best) {
+      second = best;
+      best = d;
+      best_idx = j;
+    } else {
+      second = d;
+    }
+  }
+}
 
 // Squared L2 distance of two rows of dims floats: element k into partial sum k mod 16 in
 // increasing k (a multiply, then an add: never fused), the 16 partials added as the fixed tree
