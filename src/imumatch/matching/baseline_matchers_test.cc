@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <limits>
 #include <random>
 #include <string>
 
@@ -114,6 +115,9 @@ TEST(BaselineMatchersTest, EveryKernelEqualsTheScalarPathBitForBit) {
     rng.fill(b, cv::RNG::UNIFORM, 0.0, 1.0);
     a.row(4).copyTo(b.row(9));
     b.row(9).copyTo(b.row(20));  // an exact tie
+    // NaN in train rows: their distances are NaN, which no path may keep as best or second.
+    b.row(30).setTo(std::numeric_limits<float>::quiet_NaN());
+    b.at<float>(31, dims - 1) = std::numeric_limits<float>::quiet_NaN();
     ExpectAllKernelsEqual(a, b, std::to_string(dims) + " floats");
   }
 }

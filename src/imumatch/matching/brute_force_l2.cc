@@ -155,7 +155,11 @@ __attribute__((target("avx512f"))) void NearestTwoL2Avx512(const DescriptorView&
           s[r] = _mm512_add_ps(s[r], _mm512_mul_ps(d, d));
         }
       }
-      const __m512 dist = _mm512_mask_mov_ps(inf, valid, Reduce16(s));
+      // Lanes past the last row, and NaN distances (a NaN in a descriptor), read as +inf: never
+      // kept, as the scalar update skips them (a NaN would reach second through max / min).
+      const __m512 d = Reduce16(s);
+      const __m512 dist =
+          _mm512_mask_mov_ps(inf, _mm512_mask_cmp_ps_mask(valid, d, d, _CMP_ORD_Q), d);
       float* bp = best_s.data() + static_cast<size_t>(i) * T;
       float* sp = second_s.data() + static_cast<size_t>(i) * T;
       int32_t* ip = idx_s.data() + static_cast<size_t>(i) * T;
@@ -244,7 +248,9 @@ __attribute__((target("avx2"))) void NearestTwoL2Avx2(const DescriptorView& a,
           _mm256_add_ps(_mm256_shuffle_ps(w[2], w[3], 0x44), _mm256_shuffle_ps(w[2], w[3], 0xEE));
       const __m256 d =
           _mm256_add_ps(_mm256_shuffle_ps(z0, z1, 0x88), _mm256_shuffle_ps(z0, z1, 0xDD));
-      const __m256 dist = _mm256_blendv_ps(inf, d, valid);
+      // As in the AVX-512 kernel: lanes past the last row and NaN distances read as +inf.
+      const __m256 dist =
+          _mm256_blendv_ps(inf, d, _mm256_and_ps(valid, _mm256_cmp_ps(d, d, _CMP_ORD_Q)));
       float* bp = best_s.data() + static_cast<size_t>(i) * T;
       float* sp = second_s.data() + static_cast<size_t>(i) * T;
       int32_t* ip = idx_s.data() + static_cast<size_t>(i) * T;
