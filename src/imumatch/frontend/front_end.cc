@@ -277,7 +277,7 @@ FrontEndResult FrontEnd::Process(const FrontEndFrame& frame) {
   const auto start = SteadyClock::now();
   const cv::Mat gray =
       CheckedGray(frame, undistorter_.camera(),
-                  previous_ ? std::optional<int64_t>(previous_->t_ns) : std::optional<int64_t>());
+                  previous_ ? std::optional<int64_t>(previous_->t_ns) : std::nullopt);
   FrontEndResult result;
   result.t_ns = frame.t_ns;
 

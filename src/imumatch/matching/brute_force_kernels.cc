@@ -1,5 +1,3 @@
-// Compiled with -ffp-contract=off (CMakeLists.txt): the L2 kernels' bit-for-bit agreement needs
-// every multiply and add as written, never fused.
 #include "imumatch/matching/brute_force_kernels.h"
 
 #include <algorithm>
@@ -10,11 +8,8 @@
 #include "imumatch/core/error.h"
 #include "imumatch/matching/brute_force_l2.h"
 
-#if defined(__x86_64__) || defined(__i386__)
+#if IMUMATCH_BF_X86
 #include <immintrin.h>
-#define IMUMATCH_BF_X86 1
-#else
-#define IMUMATCH_BF_X86 0
 #endif
 
 namespace imumatch {
@@ -237,27 +232,6 @@ std::vector<uint64_t> TransposeWords(const DescriptorView& b, int lanes) {
   return t;
 }
 
-// Merges per-lane nearest two (lanes of one query) into out's entry i.
-void MergeLanes(const uint64_t* best, const uint64_t* second, const int64_t* idx, int lanes, int i,
-                Nearest2& out) {
-  int star = -1;
-  for (int l = 0; l < lanes; ++l) {
-    if (best[l] >= kFar) continue;
-    if (star < 0 || best[l] < best[star] || (best[l] == best[star] && idx[l] < idx[star])) {
-      star = l;
-    }
-  }
-  if (star < 0) return;
-  uint64_t sec = kFar;
-  for (int l = 0; l < lanes; ++l) {
-    sec = std::min(sec, second[l]);
-    if (l != star) sec = std::min(sec, best[l]);
-  }
-  out.best[i] = static_cast<float>(best[star]);
-  out.best_idx[i] = static_cast<int>(idx[star]);
-  out.second[i] = sec < kFar ? static_cast<float>(sec) : std::numeric_limits<float>::infinity();
-}
-
 // AVX-512: distances of one query to 8 train rows (block col), the W words' counts summed as a
 // tree; then the lanes' nearest two and index kept.
 template <int W>
@@ -297,7 +271,7 @@ __attribute__((target("avx512f"))) void MergeLanes512(const Lanes512& k, int i, 
   _mm512_store_si512(best_l, k.best);
   _mm512_store_si512(second_l, k.second);
   _mm512_store_si512(idx_l, k.idx);
-  MergeLanes(best_l, second_l, idx_l, 8, i, out);
+  MergeLaneNearest2(best_l, second_l, idx_l, 8, kFar, i, out);
 }
 
 // Q queries (1 or 2) against all of B: the train block's words are loaded once for both queries.
@@ -415,7 +389,7 @@ __attribute__((target("avx2"))) void HammingAvx2Words(const DescriptorView& a,
     _mm256_store_si256(reinterpret_cast<__m256i*>(best_l), best);
     _mm256_store_si256(reinterpret_cast<__m256i*>(second_l), second);
     _mm256_store_si256(reinterpret_cast<__m256i*>(idx_l), idx);
-    MergeLanes(best_l, second_l, idx_l, L, i, out);
+    MergeLaneNearest2(best_l, second_l, idx_l, L, kFar, i, out);
   }
 }
 

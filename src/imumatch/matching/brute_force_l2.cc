@@ -7,7 +7,7 @@
 #include <limits>
 #include <vector>
 
-#if IMUMATCH_BF_L2_X86
+#if IMUMATCH_BF_X86
 #include <immintrin.h>
 #endif
 
@@ -58,32 +58,18 @@ void NearestTwoL2Scalar(const DescriptorView& a, const DescriptorView& b, Neares
   }
 }
 
-#if IMUMATCH_BF_L2_X86
+#if IMUMATCH_BF_X86
 namespace {
 
-// The nearest two of each query from its T lanes' (best, second, index), ties to the earliest
-// index: what one pass over the trains in order gives.
+// Every query's nearest two from its T lanes (stored query after query), as the Hamming kernels'
+// lanes are merged. A lane's best stays +inf until it keeps a row.
 void MergeFloatLanes(const std::vector<float>& best_s, const std::vector<float>& second_s,
                      const std::vector<int32_t>& idx_s, int T, Nearest2& out) {
   const int n = static_cast<int>(out.best.size());
+  const float far = std::numeric_limits<float>::infinity();
   for (int i = 0; i < n; ++i) {
-    const float* bp = best_s.data() + static_cast<size_t>(i) * T;
-    const float* sp = second_s.data() + static_cast<size_t>(i) * T;
-    const int32_t* ip = idx_s.data() + static_cast<size_t>(i) * T;
-    int star = -1;
-    for (int l = 0; l < T; ++l) {
-      if (ip[l] < 0) continue;
-      if (star < 0 || bp[l] < bp[star] || (bp[l] == bp[star] && ip[l] < ip[star])) star = l;
-    }
-    if (star < 0) continue;
-    float sec = std::numeric_limits<float>::infinity();
-    for (int l = 0; l < T; ++l) {
-      sec = std::min(sec, sp[l]);
-      if (l != star) sec = std::min(sec, bp[l]);
-    }
-    out.best[i] = bp[star];
-    out.best_idx[i] = ip[star];
-    out.second[i] = sec;
+    const size_t at = static_cast<size_t>(i) * T;
+    MergeLaneNearest2(best_s.data() + at, second_s.data() + at, idx_s.data() + at, T, far, i, out);
   }
 }
 
